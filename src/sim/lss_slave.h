@@ -1,0 +1,93 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The slave model: a CiA 305 LSS slave (plus the bits of NMT it needs) with
+ * fault knobs. Sans-I/O: fed frames and time, it emits frames through a
+ * callback with the delay after which they go on the bus. Used in-process by
+ * the unit tests (membus) and on SocketCAN by lss-sim. */
+#pragma once
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "lss/lss_proto.h"
+
+enum lss_slave_nmt { SLAVE_NMT_PRE_OPERATIONAL = 0, SLAVE_NMT_OPERATIONAL, SLAVE_NMT_STOPPED };
+
+enum lss_slave_early_config {
+        SLAVE_EARLY_NONE = 0,
+        /* enters configuration after the field named here was confirmed,
+         * before all four fields matched (a known field deviation) */
+        SLAVE_EARLY_AFTER_VENDOR,
+        SLAVE_EARLY_AFTER_PRODUCT,
+        SLAVE_EARLY_AFTER_REVISION,
+};
+
+typedef struct lss_slave_faults {
+        uint32_t latency_us;      /* fixed answer latency */
+        uint32_t jitter_us;       /* + uniform random 0..jitter */
+        bool silent;              /* never answers anything (still obeys) */
+        int ignore_cs;            /* -1: none; else this request cs is ignored entirely */
+        bool wrong_dlc;           /* answers with DLC 7 */
+        bool fastscan_when_configured; /* takes part in fastscan with a node-ID */
+        bool store_unsupported;   /* store -> error 1 */
+        bool store_fails;         /* store -> error 2 (media access) */
+        enum lss_slave_early_config early_config;
+        bool needs_nmt_stopped;   /* accepts LSS only in NMT Stopped */
+        bool no_identify;         /* no 0x46..0x4B, 0x4C services (CANopenNode) */
+        bool bit_timing_silent;   /* Configure Bit Timing ignored, no answer */
+        uint32_t bit_index_unsupported; /* bitmask of table-0 indexes answered err 1 */
+        bool miss_activation;     /* does not hear Activate Bit Timing */
+        bool duplicate_answers;   /* every answer sent twice */
+        bool configure_error_specific; /* configure node-ID -> 255/spec 0x42 */
+} lss_slave_faults;
+
+void lss_slave_faults_default(lss_slave_faults *f);
+
+/* Persistent and volatile state; lss-sim writes it to the state files. */
+typedef struct lss_slave_state {
+        uint8_t active_node_id;   /* 0xFF non-configured */
+        uint8_t pending_node_id;
+        uint8_t stored_node_id;   /* applied at power-on; 0xFF none */
+        uint8_t bit_index;        /* active table-0 index */
+        uint8_t pending_bit_index;
+        uint8_t stored_bit_index;
+        bool configuration;       /* LSS configuration state */
+        enum lss_slave_nmt nmt;
+} lss_slave_state;
+
+/* Emit a frame `delay_us` after the frame or time event being processed. */
+typedef void (*lss_slave_emit_fn)(void *userdata, const lss_frame *f, uint64_t delay_us);
+
+typedef struct lss_slave {
+        lss_identity id;
+        lss_slave_faults faults;
+        lss_slave_state st;
+        /* fastscan progress: next lsssub expected, or -1 when not scanning */
+        int fs_sub;
+        /* identify-remote progress: which of 0x46..0x4B matched so far */
+        unsigned ident_step;
+        bool ident_match;
+        /* selective switch progress: next field expected */
+        unsigned sel_step;
+        /* activate bit timing: times of the switch and the end of silence */
+        uint64_t switch_at_us, silent_until_us;
+        uint64_t now_us;
+        uint64_t rng;
+        unsigned changes;         /* incremented on every persistent state change */
+        lss_slave_emit_fn emit;
+        void *userdata;
+} lss_slave;
+
+/* node_id 1..127 or 0xFF; bit_index is the table-0 index the slave runs at. */
+void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8_t bit_index,
+                    const lss_slave_faults *faults, uint64_t seed, lss_slave_emit_fn emit, void *userdata);
+/* Power cycle: stored values become active, boot-up is sent when configured. */
+void lss_slave_power_on(lss_slave *s, uint64_t now_us);
+/* Every frame on the bus (the slave's own excepted). */
+void lss_slave_on_frame(lss_slave *s, const lss_frame *f, uint64_t now_us);
+/* Time passed; call at lss_slave_deadline(). */
+void lss_slave_on_time(lss_slave *s, uint64_t now_us);
+/* Next time the slave needs lss_slave_on_time(), UINT64_MAX if none. */
+uint64_t lss_slave_deadline(const lss_slave *s);
+/* Whether the slave can hear/be heard at the bus's bit timing index right now
+ * (bit rate differs or it is inside an activation window -> false). */
+bool lss_slave_on_bus(const lss_slave *s, uint8_t bus_bit_index, uint64_t now_us);
