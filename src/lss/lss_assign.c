@@ -1,0 +1,175 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Giving one slave its node-ID. The slave is put in configuration state by
+ * selective switch (its full identity is known) or by fastscan (then its
+ * identity is read back by inquiry and must equal what fastscan found, or
+ * everything goes back to waiting and the scan is retried). Nothing is
+ * configured or stored when it already has the node-ID. */
+#include "lss/lss_internal.h"
+
+/* Send an unconfirmed frame (no wait). */
+#define SEND(m, pc, frame_expr) STEP_REQUEST(m, pc, frame_expr, -1, false)
+
+/* The part shared by both ways in: the slave is the only one in configuration. */
+static int assign_tail(lss_master *m, lss_assign_state *s) {
+        PT_BEGIN(&s->tail_pc);
+        for (s->attempt = 0;; s->attempt++) {
+                STEP_REQUEST(m, &s->tail_pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID, false);
+                if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
+                        break;
+                m->stats.retries++;
+        }
+        if (!step_answered(m)) {
+                master_fail(m, LSS_E_NO_RESPONSE, "the selected slave did not answer Inquire Node-ID");
+                goto out;
+        }
+        if (step_conflict(m)) {
+                master_fail(m, LSS_E_CONFLICT, "more than one slave in configuration state answered Inquire Node-ID");
+                goto out;
+        }
+        s->old = m->step.answer.data[1];
+        m->result.node_id = s->old;
+        if (s->old == s->node_id) {
+                /* already right: nothing to configure, nothing to store */
+                SEND(m, &s->tail_pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                goto out;
+        }
+
+        for (s->attempt = 0;; s->attempt++) {
+                STEP_REQUEST(m, &s->tail_pc, lss_encode_configure_node_id(&f__, s->node_id), LSS_CS_CONFIGURE_NODE_ID,
+                             false);
+                if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
+                        break;
+                m->stats.retries++;
+        }
+        if (!step_answered(m)) {
+                master_fail(m, LSS_E_NO_RESPONSE, "no answer to Configure Node-ID %u", s->node_id);
+                goto out;
+        }
+        if (step_conflict(m)) {
+                master_fail(m, LSS_E_CONFLICT, "more than one slave answered Configure Node-ID");
+                goto out;
+        }
+        m->result.err = m->step.answer.data[1];
+        m->result.spec = m->step.answer.data[2];
+        if (m->result.err != 0) {
+                master_fail(m, LSS_E_REJECTED, "Configure Node-ID %u rejected by the slave: error %u, spec %u",
+                            s->node_id, m->result.err, m->result.spec);
+                goto out;
+        }
+        m->result.changed = true;
+
+        if (s->flags & LSS_ASSIGN_STORE) {
+                for (s->attempt = 0;; s->attempt++) {
+                        STEP_REQUEST(m, &s->tail_pc, lss_encode_store(&f__), LSS_CS_STORE, false);
+                        if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
+                                break;
+                        m->stats.retries++;
+                }
+                if (!step_answered(m)) {
+                        master_fail(m, LSS_E_NO_RESPONSE, "no answer to Store Configuration");
+                        goto out;
+                }
+                m->result.err = m->step.answer.data[1];
+                m->result.spec = m->step.answer.data[2];
+                if (m->result.err != 0) {
+                        master_fail(m, LSS_E_REJECTED, "Store Configuration rejected by the slave: error %u, spec %u",
+                                    m->result.err, m->result.spec);
+                        goto out;
+                }
+        }
+
+        /* back to waiting: a non-configured slave now resets itself and boots up */
+        SEND(m, &s->tail_pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        if (!(s->flags & LSS_ASSIGN_VERIFY))
+                goto out;
+        m->step = (lss_step) { .kind = STEP_BOOTUP, .bootup_node = s->node_id,
+                               .wait_us = m->timing.cfg.bootup_timeout_us };
+        if (s->old != LSS_NODE_ID_UNCONFIGURED) {
+                /* a configured slave applies the new ID at Reset Communication */
+                lss_frame f;
+                nmt_encode(&f, NMT_CS_RESET_COMMUNICATION, s->old);
+                step_add_tx(m, &f);
+        }
+        step_start(m);
+        PT_YIELD(&s->tail_pc);
+        if (!step_answered(m))
+                master_fail(m, LSS_E_VERIFY, "no boot-up from node %u after the assignment", s->node_id);
+        else if (step_conflict(m))
+                master_fail(m, LSS_E_CONFLICT, "more than one device booted up as node %u (duplicate identity?)",
+                            s->node_id);
+out:;
+        PT_END(&s->tail_pc);
+}
+
+static void identity_of_scan(lss_assign_state *s) {
+        for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
+                lss_identity_set_field(&s->id, i, s->fs.value[i]);
+}
+
+int proc_assign(lss_master *m, lss_assign_state *s) {
+        PT_BEGIN(&s->pc);
+        m->result.id = s->id;
+        for (s->attempt = 0;; s->attempt++) {
+                step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE, false);
+                for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
+                        lss_frame f;
+                        lss_encode_switch_selective(&f, i, lss_identity_field(&s->id, i));
+                        step_add_tx(m, &f);
+                }
+                step_start(m);
+                PT_YIELD(&s->pc);
+                if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
+                        break;
+                m->stats.retries++;
+        }
+        if (!step_answered(m)) {
+                master_fail(m, LSS_E_NOT_FOUND, "no slave %08x:%08x:%08x:%08x answered the selective switch",
+                            s->id.vendor, s->id.product, s->id.revision, s->id.serial);
+                goto out;
+        }
+        s->tail_pc = 0;
+        PT_CALL(&s->pc, assign_tail(m, s));
+out:;
+        PT_END(&s->pc);
+}
+
+int proc_fastscan_assign(lss_master *m, lss_assign_state *s) {
+        PT_BEGIN(&s->pc);
+        for (s->attempt = 0;; s->attempt++) {
+                s->fs.pc = 0;
+                PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
+                if (s->fs.none) {
+                        master_fail(m, LSS_E_NOT_FOUND, "no non-configured slave answered the fastscan");
+                        goto out;
+                }
+                if (!s->fs.found) {
+                        master_fail(m, LSS_E_INCOMPLETE, "fastscan did not converge");
+                        goto out;
+                }
+                identity_of_scan(s);
+                /* read the identity back: it must be exactly what the scan found,
+                 * from exactly one slave */
+                for (s->field = 0; s->field < LSS_FIELD_COUNT; s->field++) {
+                        STEP_REQUEST(m, &s->pc, lss_encode_inquire(&f__, s->field),
+                                     LSS_CS_INQUIRE_VENDOR + (int) s->field, false);
+                        if (!step_answered(m) || step_conflict(m) ||
+                            lss_get_u32(m->step.answer.data + 1) != lss_identity_field(&s->id, s->field))
+                                break;
+                }
+                if (s->field == LSS_FIELD_COUNT)
+                        break;
+                m->stats.retries++;
+                if (s->attempt >= m->timing.cfg.retries) {
+                        master_fail(m, LSS_E_CONFLICT,
+                                    "the slave found by fastscan (%08x:%08x:%08x:%08x) did not confirm its identity",
+                                    s->id.vendor, s->id.product, s->id.revision, s->id.serial);
+                        goto out;
+                }
+                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        }
+        m->result.id = s->id;
+        s->tail_pc = 0;
+        PT_CALL(&s->pc, assign_tail(m, s));
+out:;
+        PT_END(&s->pc);
+}

@@ -1,0 +1,141 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Engine internals shared by the procedure files. Not a public header. */
+#pragma once
+
+#include "lss/lss_master.h"
+#include "lss/lss_timing.h"
+
+/* Procedures are written as stackless coroutines (the switch-on-line idiom):
+ * they read top to bottom, and every wait for the bus is a visible PT_STEP.
+ * Their variables live in their state structs, never on the C stack. */
+enum { PT_WAITING = 0, PT_DONE = 1 };
+#define PT_BEGIN(pc) switch (*(pc)) { case 0:
+#define PT_END(pc) } *(pc) = 0; return PT_DONE
+#define PT_YIELD(pc) do { *(pc) = __LINE__; return PT_WAITING; case __LINE__:; } while (0)
+/* Run a child procedure until it is done (its state must be zeroed first). */
+#define PT_CALL(pc, child) \
+        do { *(pc) = __LINE__; __attribute__((fallthrough)); case __LINE__: \
+                if ((child) == PT_WAITING) return PT_WAITING; } while (0)
+
+#define LSS_MAX_TX 6
+
+enum step_kind {
+        STEP_LSS,    /* LSS request(s), answered by expect_cs or unconfirmed */
+        STEP_BOOTUP, /* wait for the boot-up of a node (optionally after sending tx) */
+        STEP_DELAY,  /* send tx (if any) and stay silent for wait_us */
+};
+
+enum step_phase { PHASE_IDLE, PHASE_WAIT, PHASE_ANSWER_GUARD, PHASE_LATE_GUARD, PHASE_DONE };
+
+typedef struct lss_step {
+        enum step_kind kind;
+        lss_frame tx[LSS_MAX_TX];
+        unsigned n_tx;
+        int expect_cs;         /* -1: unconfirmed */
+        bool multi;            /* several slaves may answer (fastscan, identify) */
+        bool discovery;        /* first contact: full configured wait */
+        uint8_t bootup_node;
+        uint32_t wait_us;      /* STEP_BOOTUP / STEP_DELAY */
+
+        enum step_phase phase;
+        uint64_t sent_at, tx_us, first_at, end_at;
+        unsigned n_answers;    /* distinct answers (identical ones count once) */
+        lss_frame answer;      /* the first */
+        bool late;             /* answered inside the late guard */
+        bool void_;            /* frames were lost meanwhile: do not trust */
+} lss_step;
+
+typedef struct lss_fastscan_state {
+        int pc;
+        lss_fastscan_known known;
+        uint32_t value[LSS_FIELD_COUNT];
+        unsigned sub, attempt, field_try, confirmed; /* fields [0, confirmed) confirmed earlier */
+        int bit;
+        bool found, none;          /* outcome: one slave in configuration / nobody there */
+} lss_fastscan_state;
+
+typedef struct lss_assign_state {
+        int pc, tail_pc;
+        lss_identity id;
+        uint8_t node_id, old;
+        unsigned flags, attempt, field;
+        bool selected;
+        lss_fastscan_state fs;
+} lss_assign_state;
+
+typedef struct lss_range_item { uint32_t rlo, rhi, slo, shi; } lss_range_item;
+
+typedef struct lss_scan_state {
+        int vpc;
+        lss_fastscan_known known;
+        lss_identify_range range;
+        lss_fastscan_state fs;
+        unsigned pass, i, dropped, failed_scans;
+        /* slowscan: stack of intervals still to query */
+        lss_range_item *stack, cur;
+        size_t n_stack, cap_stack;
+        lss_device *cand;
+        size_t n_cand, cap_cand;
+} lss_scan_state;
+
+typedef int (*lss_proc_fn)(lss_master *m);
+
+struct lss_master {
+        lss_timing timing;
+        lss_step step;
+        lss_proc_fn proc;
+        int pc;                 /* top-level procedure */
+        bool running, done, cancelling;
+        bool procedure;         /* ends with every slave in waiting, also on failure */
+        uint64_t now;
+
+        /* arguments and state of the running operation */
+        union {
+                struct { enum lss_mode mode; } sg;
+                struct { uint8_t a, b; uint16_t u16; } raw;
+                struct { unsigned field, i; } inq;
+                lss_identify_range ir;
+                struct { enum nmt_cs cs; uint8_t node; } nmt;
+        } arg;
+        lss_identity sel_id;
+        lss_fastscan_state fs;
+        lss_assign_state as;
+        lss_scan_state sc;
+
+        lss_frame txq[16];
+        unsigned txq_head, txq_len;
+
+        lss_result result;
+        lss_device *devices;
+        size_t n_devices, cap_devices;
+        lss_master_stats stats;
+        lss_progress_fn progress;
+        void *progress_ud;
+};
+
+/* step.c */
+void step_lss(lss_master *m, int expect_cs, bool multi);
+void step_add_tx(lss_master *m, const lss_frame *f);
+void step_start(lss_master *m);
+void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx);
+void step_on_time(lss_master *m, uint64_t now);
+uint64_t step_deadline(const lss_master *m);
+bool step_answered(const lss_master *m);
+bool step_conflict(const lss_master *m);
+
+/* Start a one-frame confirmed/unconfirmed LSS step and return from the coroutine until it is done. */
+#define STEP_REQUEST(m, pc, frame_expr, cs, multi)  \
+        do { lss_frame f__; frame_expr; step_lss(m, cs, multi); step_add_tx(m, &f__); step_start(m); \
+             PT_YIELD(pc); } while (0)
+
+/* master.c */
+void master_fail(lss_master *m, enum lss_status st, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+int master_add_device(lss_master *m, const lss_identity *id, uint8_t node_id);
+void master_progress(lss_master *m, double p);
+
+/* procedures */
+int proc_fastscan(lss_master *m, lss_fastscan_state *s);
+int proc_assign(lss_master *m, lss_assign_state *s);
+int proc_fastscan_assign(lss_master *m, lss_assign_state *s);
+int proc_enumerate(lss_master *m);
+int proc_slowscan(lss_master *m);

@@ -1,0 +1,562 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Public face of the engine: starting operations, feeding events, results. */
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lss/lss_internal.h"
+
+const char *lss_status_name(enum lss_status s) {
+        static const char *const names[] = {
+                [LSS_OK] = "ok",
+                [LSS_E_NO_RESPONSE] = "no-response",
+                [LSS_E_REJECTED] = "rejected",
+                [LSS_E_CONFLICT] = "conflict",
+                [LSS_E_NOT_FOUND] = "not-found",
+                [LSS_E_BUS_DOWN] = "bus-down",
+                [LSS_E_BUS_OFF] = "bus-off",
+                [LSS_E_CANCELLED] = "cancelled",
+                [LSS_E_INVALID] = "invalid",
+                [LSS_E_VERIFY] = "not-verified",
+                [LSS_E_INCOMPLETE] = "incomplete",
+        };
+        return (unsigned) s < sizeof(names) / sizeof(names[0]) && names[s] ? names[s] : "unknown";
+}
+
+lss_master *lss_master_new(const lss_timing_config *cfg) {
+        lss_master *m = calloc(1, sizeof(*m));
+        if (!m)
+                return NULL;
+        lss_timing_config def;
+        if (!cfg) {
+                lss_timing_config_default(&def);
+                cfg = &def;
+        }
+        lss_timing_init(&m->timing, cfg);
+        return m;
+}
+
+void lss_master_free(lss_master *m) {
+        if (!m)
+                return;
+        free(m->devices);
+        free(m->sc.stack);
+        free(m->sc.cand);
+        free(m);
+}
+
+void lss_master_set_timing(lss_master *m, const lss_timing_config *cfg) {
+        lss_timing t = m->timing;
+        lss_timing_init(&m->timing, cfg);
+        /* what was measured on this bus stays true */
+        memcpy(m->timing.samples, t.samples, sizeof(t.samples));
+        m->timing.n_samples = t.n_samples;
+        m->timing.next = t.next;
+}
+
+void lss_master_set_progress(lss_master *m, lss_progress_fn fn, void *userdata) {
+        m->progress = fn;
+        m->progress_ud = userdata;
+}
+
+void master_progress(lss_master *m, double p) {
+        if (m->progress)
+                m->progress(m->progress_ud, p < 0 ? 0 : p > 1 ? 1 : p);
+}
+
+void master_fail(lss_master *m, enum lss_status st, const char *fmt, ...) {
+        va_list ap;
+        m->result.status = st;
+        va_start(ap, fmt);
+        vsnprintf(m->result.message, sizeof(m->result.message), fmt, ap);
+        va_end(ap);
+}
+
+int master_add_device(lss_master *m, const lss_identity *id, uint8_t node_id) {
+        if (m->n_devices == m->cap_devices) {
+                size_t cap = m->cap_devices ? m->cap_devices * 2 : 16;
+                lss_device *d = realloc(m->devices, cap * sizeof(*d));
+                if (!d)
+                        return -ENOMEM;
+                m->devices = d;
+                m->cap_devices = cap;
+        }
+        m->devices[m->n_devices++] = (lss_device) { .id = *id, .node_id = node_id };
+        return 0;
+}
+
+static void queue_switch_waiting(lss_master *m) {
+        lss_frame f;
+        lss_encode_switch_global(&f, LSS_MODE_WAITING);
+        if (m->txq_len < 16) {
+                m->txq[(m->txq_head + m->txq_len) % 16] = f;
+                m->txq_len++;
+        }
+}
+
+static void finish(lss_master *m) {
+        m->running = false;
+        m->done = true;
+        m->step.phase = PHASE_IDLE;
+        m->result.devices = m->devices;
+        m->result.n_devices = m->n_devices;
+        m->stats.timeout_us = lss_timing_wait(&m->timing, false);
+        m->stats.latency_min_us = lss_timing_min(&m->timing);
+        m->stats.latency_max_us = lss_timing_max(&m->timing);
+}
+
+/* Run the procedure for as long as it does not wait for the bus. */
+static void advance(lss_master *m) {
+        while (m->running) {
+                if (m->step.phase != PHASE_DONE && m->step.phase != PHASE_IDLE)
+                        return;
+                if (m->proc(m) == PT_DONE) {
+                        /* procedures (not raw services) leave every slave in waiting,
+                         * also on failure */
+                        if (m->result.status != LSS_OK && m->procedure)
+                                queue_switch_waiting(m);
+                        finish(m);
+                        return;
+                }
+        }
+}
+
+static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t now) {
+        if (m->running)
+                return -EBUSY;
+        m->proc = proc;
+        m->procedure = procedure;
+        m->pc = 0;
+        m->running = true;
+        m->done = false;
+        m->cancelling = false;
+        m->now = now;
+        m->n_devices = 0;
+        m->txq_head = m->txq_len = 0;
+        memset(&m->result, 0, sizeof(m->result));
+        m->result.node_id = LSS_NODE_ID_UNCONFIGURED;
+        m->step.phase = PHASE_IDLE;
+        advance(m);
+        return 0;
+}
+
+/* ---- raw services ---- */
+
+static int proc_switch_global(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        STEP_REQUEST(m, &m->pc, lss_encode_switch_global(&f__, m->arg.sg.mode), -1, false);
+        PT_END(&m->pc);
+}
+
+static int proc_switch_selective(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE, false);
+        for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
+                lss_frame f;
+                lss_encode_switch_selective(&f, i, lss_identity_field(&m->sel_id, i));
+                step_add_tx(m, &f);
+        }
+        step_start(m);
+        PT_YIELD(&m->pc);
+        m->result.found = step_answered(m);
+        if (!m->result.found)
+                master_fail(m, LSS_E_NO_RESPONSE, "no slave answered the selective switch");
+        PT_END(&m->pc);
+}
+
+/* The checks every confirmed single-slave service shares. */
+static bool single_answer_ok(lss_master *m, const char *what) {
+        if (!step_answered(m)) {
+                master_fail(m, LSS_E_NO_RESPONSE, "%s: no answer (is a slave in configuration state?)", what);
+                return false;
+        }
+        if (step_conflict(m)) {
+                master_fail(m, LSS_E_CONFLICT, "%s: different answers from more than one slave in configuration state",
+                            what);
+                return false;
+        }
+        return true;
+}
+
+static bool error_code_ok(lss_master *m, const char *what) {
+        m->result.err = m->step.answer.data[1];
+        m->result.spec = m->step.answer.data[2];
+        if (m->result.err == 0)
+                return true;
+        master_fail(m, LSS_E_REJECTED, "%s rejected by the slave: error %u, spec %u", what, m->result.err,
+                    m->result.spec);
+        return false;
+}
+
+static int proc_configure_node_id(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        STEP_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, m->arg.raw.a), LSS_CS_CONFIGURE_NODE_ID, false);
+        if (single_answer_ok(m, "Configure Node-ID"))
+                error_code_ok(m, "Configure Node-ID");
+        PT_END(&m->pc);
+}
+
+static int proc_configure_bit_timing(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        STEP_REQUEST(m, &m->pc, lss_encode_configure_bit_timing(&f__, m->arg.raw.a, m->arg.raw.b),
+                     LSS_CS_CONFIGURE_BIT_TIMING, false);
+        if (single_answer_ok(m, "Configure Bit Timing"))
+                error_code_ok(m, "Configure Bit Timing");
+        PT_END(&m->pc);
+}
+
+static int proc_activate_bit_timing(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        STEP_REQUEST(m, &m->pc, lss_encode_activate_bit_timing(&f__, m->arg.raw.u16), -1, false);
+        PT_END(&m->pc);
+}
+
+static int proc_store(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        STEP_REQUEST(m, &m->pc, lss_encode_store(&f__), LSS_CS_STORE, false);
+        if (single_answer_ok(m, "Store Configuration"))
+                error_code_ok(m, "Store Configuration");
+        PT_END(&m->pc);
+}
+
+static const char *const inquire_names[] = { "Inquire Vendor-ID", "Inquire Product-Code", "Inquire Revision",
+                                             "Inquire Serial", "Inquire Node-ID" };
+
+static int proc_inquire(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.field),
+                     LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.field, false);
+        if (single_answer_ok(m, inquire_names[m->arg.inq.field])) {
+                if (m->arg.inq.field == LSS_FIELD_COUNT)
+                        m->result.node_id = m->step.answer.data[1];
+                else
+                        m->result.value = lss_get_u32(m->step.answer.data + 1);
+        }
+        PT_END(&m->pc);
+}
+
+static int proc_inquire_identity(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        for (m->arg.inq.i = 0; m->arg.inq.i < LSS_FIELD_COUNT; m->arg.inq.i++) {
+                STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.i),
+                             LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.i, false);
+                if (!single_answer_ok(m, inquire_names[m->arg.inq.i]))
+                        break;
+                lss_identity_set_field(&m->result.id, m->arg.inq.i, lss_get_u32(m->step.answer.data + 1));
+        }
+        PT_END(&m->pc);
+}
+
+static int proc_identify_remote(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        step_lss(m, LSS_CS_IDENTIFY_SLAVE, true);
+        m->step.discovery = true;
+        {
+                const lss_identify_range *r = &m->arg.ir;
+                const uint32_t v[6] = { r->vendor, r->product, r->rev_lo, r->rev_hi, r->serial_lo, r->serial_hi };
+                for (unsigned i = 0; i < 6; i++) {
+                        lss_frame f;
+                        lss_encode_identify_remote(&f, i, v[i]);
+                        step_add_tx(m, &f);
+                }
+        }
+        step_start(m);
+        PT_YIELD(&m->pc);
+        m->result.found = step_answered(m);
+        PT_END(&m->pc);
+}
+
+static int proc_identify_non_configured(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        step_lss(m, LSS_CS_IDENTIFY_NON_CONFIGURED_SLAVE, true);
+        m->step.discovery = true;
+        {
+                lss_frame f;
+                lss_encode_identify_non_configured(&f);
+                step_add_tx(m, &f);
+        }
+        step_start(m);
+        PT_YIELD(&m->pc);
+        m->result.found = step_answered(m);
+        PT_END(&m->pc);
+}
+
+static int proc_nmt(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        STEP_REQUEST(m, &m->pc, nmt_encode(&f__, m->arg.nmt.cs, m->arg.nmt.node), -1, false);
+        PT_END(&m->pc);
+}
+
+static int proc_fastscan_top(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        PT_CALL(&m->pc, proc_fastscan(m, &m->fs));
+        if (m->fs.found) {
+                for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
+                        lss_identity_set_field(&m->result.id, i, m->fs.value[i]);
+                m->result.found = true;
+        } else if (m->fs.none)
+                master_fail(m, LSS_E_NOT_FOUND, "no non-configured slave answered the fastscan");
+        else
+                master_fail(m, LSS_E_INCOMPLETE, "fastscan did not converge after %u attempts", m->fs.attempt);
+        PT_END(&m->pc);
+}
+
+static int proc_assign_top(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        PT_CALL(&m->pc, proc_assign(m, &m->as));
+        PT_END(&m->pc);
+}
+
+static int proc_fastscan_assign_top(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        PT_CALL(&m->pc, proc_fastscan_assign(m, &m->as));
+        PT_END(&m->pc);
+}
+
+int lss_master_switch_global(lss_master *m, enum lss_mode mode, uint64_t now) {
+        if (mode != LSS_MODE_WAITING && mode != LSS_MODE_CONFIGURATION)
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        m->arg.sg.mode = mode;
+        return start_op(m, proc_switch_global, false, now);
+}
+
+int lss_master_switch_selective(lss_master *m, const lss_identity *id, uint64_t now) {
+        if (m->running)
+                return -EBUSY;
+        m->sel_id = *id;
+        return start_op(m, proc_switch_selective, false, now);
+}
+
+int lss_master_configure_node_id(lss_master *m, uint8_t node_id, uint64_t now) {
+        if (!lss_node_id_valid(node_id) && node_id != LSS_NODE_ID_UNCONFIGURED)
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        m->arg.raw.a = node_id;
+        return start_op(m, proc_configure_node_id, false, now);
+}
+
+int lss_master_configure_bit_timing(lss_master *m, uint8_t table, uint8_t index, uint64_t now) {
+        if (m->running)
+                return -EBUSY;
+        m->arg.raw.a = table;
+        m->arg.raw.b = index;
+        return start_op(m, proc_configure_bit_timing, false, now);
+}
+
+int lss_master_activate_bit_timing(lss_master *m, uint16_t delay_ms, uint64_t now) {
+        if (m->running)
+                return -EBUSY;
+        m->arg.raw.u16 = delay_ms;
+        return start_op(m, proc_activate_bit_timing, false, now);
+}
+
+int lss_master_store(lss_master *m, uint64_t now) {
+        if (m->running)
+                return -EBUSY;
+        return start_op(m, proc_store, false, now);
+}
+
+int lss_master_inquire(lss_master *m, unsigned field, uint64_t now) {
+        if (field > LSS_FIELD_COUNT)
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        m->arg.inq.field = field;
+        return start_op(m, proc_inquire, false, now);
+}
+
+int lss_master_inquire_identity(lss_master *m, uint64_t now) {
+        if (m->running)
+                return -EBUSY;
+        return start_op(m, proc_inquire_identity, false, now);
+}
+
+static bool range_valid(const lss_identify_range *r) {
+        return r->rev_lo <= r->rev_hi && r->serial_lo <= r->serial_hi;
+}
+
+int lss_master_identify_remote(lss_master *m, const lss_identify_range *r, uint64_t now) {
+        if (!range_valid(r))
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        m->arg.ir = *r;
+        return start_op(m, proc_identify_remote, false, now);
+}
+
+int lss_master_identify_non_configured(lss_master *m, uint64_t now) {
+        if (m->running)
+                return -EBUSY;
+        return start_op(m, proc_identify_non_configured, false, now);
+}
+
+static bool known_valid(const lss_fastscan_known *k) {
+        for (unsigned i = 0; k && i < LSS_FIELD_COUNT; i++)
+                if (k->known_bits[i] > 32)
+                        return false;
+        return true;
+}
+
+static void set_known(lss_fastscan_known *dst, const lss_fastscan_known *k) {
+        if (k)
+                *dst = *k;
+        else
+                memset(dst, 0, sizeof(*dst));
+}
+
+int lss_master_fastscan(lss_master *m, const lss_fastscan_known *known, uint64_t now) {
+        if (!known_valid(known))
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        memset(&m->fs, 0, sizeof(m->fs));
+        set_known(&m->fs.known, known);
+        return start_op(m, proc_fastscan_top, false, now);
+}
+
+int lss_master_nmt(lss_master *m, enum nmt_cs cs, uint8_t node_id, uint64_t now) {
+        if (node_id > LSS_NODE_ID_MAX)
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        m->arg.nmt.cs = cs;
+        m->arg.nmt.node = node_id;
+        return start_op(m, proc_nmt, false, now);
+}
+
+int lss_master_enumerate(lss_master *m, const lss_fastscan_known *known, uint64_t now) {
+        if (!known_valid(known))
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        memset(&m->sc.known, 0, sizeof(m->sc.known));
+        set_known(&m->sc.known, known);
+        m->sc.vpc = 0;
+        return start_op(m, proc_enumerate, true, now);
+}
+
+int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now) {
+        if (!range_valid(r))
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        m->sc.range = *r;
+        m->sc.vpc = 0;
+        return start_op(m, proc_slowscan, true, now);
+}
+
+int lss_master_assign(lss_master *m, const lss_identity *id, uint8_t node_id, unsigned flags, uint64_t now) {
+        if (!lss_node_id_valid(node_id))
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        memset(&m->as, 0, sizeof(m->as));
+        m->as.id = *id;
+        m->as.node_id = node_id;
+        m->as.flags = flags;
+        return start_op(m, proc_assign_top, true, now);
+}
+
+int lss_master_fastscan_assign(lss_master *m, const lss_fastscan_known *known, uint8_t node_id, unsigned flags,
+                               uint64_t now) {
+        if (!lss_node_id_valid(node_id) || !known_valid(known))
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        memset(&m->as, 0, sizeof(m->as));
+        set_known(&m->as.fs.known, known);
+        m->as.node_id = node_id;
+        m->as.flags = flags;
+        return start_op(m, proc_fastscan_assign_top, true, now);
+}
+
+/* ---- driving ---- */
+
+void lss_master_on_frame(lss_master *m, const lss_frame *f, uint64_t rx_us) {
+        if (rx_us > m->now)
+                m->now = rx_us;
+        if (!m->running) {
+                m->stats.ignored_frames++;
+                return;
+        }
+        step_on_frame(m, f, rx_us);
+        advance(m);
+}
+
+void lss_master_on_time(lss_master *m, uint64_t now) {
+        if (now > m->now)
+                m->now = now;
+        if (!m->running)
+                return;
+        step_on_time(m, now);
+        advance(m);
+}
+
+void lss_master_on_sent(lss_master *m, uint64_t now) {
+        if (now > m->now)
+                m->now = now;
+        /* timeouts run from the moment the request really left */
+        if (m->running && m->step.phase == PHASE_WAIT && now > m->step.sent_at)
+                m->step.sent_at = now;
+}
+
+void lss_master_on_rx_lost(lss_master *m, uint64_t now) {
+        (void) now;
+        if (m->running && m->step.phase != PHASE_IDLE && m->step.phase != PHASE_DONE)
+                m->step.void_ = true;
+}
+
+void lss_master_on_bus_error(lss_master *m, enum lss_status status, const char *why, uint64_t now) {
+        if (now > m->now)
+                m->now = now;
+        if (!m->running)
+                return;
+        master_fail(m, status, "%s", why ? why : lss_status_name(status));
+        m->txq_len = 0;
+        finish(m);
+}
+
+void lss_master_cancel(lss_master *m, uint64_t now) {
+        if (now > m->now)
+                m->now = now;
+        if (!m->running)
+                return;
+        m->cancelling = true;
+        master_fail(m, LSS_E_CANCELLED, "cancelled");
+        queue_switch_waiting(m);
+        finish(m);
+}
+
+bool lss_master_next_tx(lss_master *m, lss_frame *f) {
+        if (m->txq_len == 0)
+                return false;
+        *f = m->txq[m->txq_head];
+        m->txq_head = (m->txq_head + 1) % 16;
+        m->txq_len--;
+        return true;
+}
+
+uint64_t lss_master_deadline(const lss_master *m) {
+        return m->running ? step_deadline(m) : UINT64_MAX;
+}
+
+bool lss_master_busy(const lss_master *m) {
+        return m->running;
+}
+
+bool lss_master_done(const lss_master *m) {
+        return m->done && m->txq_len == 0;
+}
+
+const lss_result *lss_master_result(const lss_master *m) {
+        return &m->result;
+}
+
+const lss_master_stats *lss_master_get_stats(const lss_master *m) {
+        return &m->stats;
+}

@@ -1,0 +1,162 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The LSS master engine. Sans-I/O: it is fed received frames and the passing of
+ * time, and in return hands out frames to send and the next time it wants to be
+ * woken. It never sleeps, never touches a socket, so unit tests drive it on
+ * virtual time and the daemon drives it from sd-event.
+ *
+ * One operation at a time (the daemon serialises jobs per bus). Driving loop:
+ *
+ *     lss_master_start_xxx(m, ..., now);
+ *     for (;;) {
+ *             while (lss_master_next_tx(m, &f)) send(f);
+ *             lss_master_on_sent(m, now());        // the frames are out
+ *             if (lss_master_done(m)) break;
+ *             wait for a frame or until lss_master_deadline(m);
+ *             frame ? lss_master_on_frame(m, &f, rx_time) : lss_master_on_time(m, now());
+ *     }
+ *     result = lss_master_result(m);
+ *
+ * The rules that make late and stale answers harmless are in docs/engine.md. */
+#pragma once
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "lss/lss_proto.h"
+
+enum lss_status {
+        LSS_OK = 0,
+        LSS_E_NO_RESPONSE,   /* nobody answered a confirmed service */
+        LSS_E_REJECTED,      /* the slave answered with an error code (result.err/spec) */
+        LSS_E_CONFLICT,      /* more than one slave answered where exactly one may, or identities disagree */
+        LSS_E_NOT_FOUND,     /* the addressed slave or a slave to scan is not there */
+        LSS_E_BUS_DOWN,      /* the transport reported the interface down or gone */
+        LSS_E_BUS_OFF,       /* the controller went bus-off */
+        LSS_E_CANCELLED,
+        LSS_E_INVALID,       /* a bad argument */
+        LSS_E_VERIFY,        /* the assignment was not confirmed by a boot-up */
+        LSS_E_INCOMPLETE,    /* a scan could not finish cleanly (see message) */
+};
+
+const char *lss_status_name(enum lss_status s);
+
+typedef struct lss_timing_config {
+        uint32_t timeout_us;        /* fixed no-answer wait; also the adaptive start value */
+        bool adaptive;              /* derive the wait from measured answer latency */
+        uint32_t floor_us;          /* adaptive: never wait less than this */
+        uint32_t factor_pct;        /* adaptive: wait = factor * worst latency seen (150 = 1.5x) */
+        uint32_t guard_floor_us;    /* minimum answer guard and late guard */
+        uint32_t bootup_timeout_us; /* wait for the boot-up that verifies an assignment */
+        uint32_t bitrate;           /* bit/s of the bus, 0 = unknown (frame times then count as 0) */
+        unsigned retries;           /* attempts per step / per fastscan field before giving up */
+} lss_timing_config;
+
+void lss_timing_config_default(lss_timing_config *c);
+
+/* Known fields for fastscan: a field with its bit set in `known_mask` is
+ * confirmed directly (bitcheck 0) instead of being scanned bit by bit;
+ * `known_bits` gives, per field, how many of its top bits are known (0..32)
+ * when the field is not fully known (the rest is scanned). */
+typedef struct lss_fastscan_known {
+        lss_identity value;
+        uint8_t known_bits[LSS_FIELD_COUNT]; /* 32 = fully known */
+} lss_fastscan_known;
+
+/* Ranges for identify remote slaves / slowscan (inclusive). */
+typedef struct lss_identify_range {
+        uint32_t vendor, product;
+        uint32_t rev_lo, rev_hi, serial_lo, serial_hi;
+} lss_identify_range;
+
+typedef struct lss_device {
+        lss_identity id;
+        uint8_t node_id;     /* 0xFF non-configured */
+} lss_device;
+
+typedef struct lss_result {
+        enum lss_status status;
+        uint8_t err, spec;   /* LSS_E_REJECTED: the slave's error and manufacturer code */
+        bool found;          /* identify services, selective switch */
+        uint32_t value;      /* inquire */
+        uint8_t node_id;     /* inquire node-ID; assign: old node-ID */
+        bool changed;        /* assign: something was configured */
+        lss_identity id;     /* fastscan, inquire identity */
+        lss_device *devices; /* scans: every slave found (owned by the engine until next start) */
+        size_t n_devices;
+        char message[160];   /* human-readable detail for errors */
+} lss_result;
+
+typedef struct lss_master_stats {
+        uint64_t steps, retries, timeouts, late_answers, ignored_frames, stale_frames, conflicts;
+        uint32_t latency_min_us, latency_max_us; /* recent answer latency window */
+        uint32_t timeout_us;                     /* the no-answer wait in force now */
+} lss_master_stats;
+
+/* Progress callback (0..1) for the long operations; optional. */
+typedef void (*lss_progress_fn)(void *userdata, double progress);
+
+typedef struct lss_master lss_master;
+
+lss_master *lss_master_new(const lss_timing_config *cfg);
+void lss_master_free(lss_master *m);
+void lss_master_set_timing(lss_master *m, const lss_timing_config *cfg);
+void lss_master_set_progress(lss_master *m, lss_progress_fn fn, void *userdata);
+
+/* ---- raw services (each one operation) ---- */
+int lss_master_switch_global(lss_master *m, enum lss_mode mode, uint64_t now);
+int lss_master_switch_selective(lss_master *m, const lss_identity *id, uint64_t now);
+int lss_master_configure_node_id(lss_master *m, uint8_t node_id, uint64_t now);
+int lss_master_configure_bit_timing(lss_master *m, uint8_t table, uint8_t index, uint64_t now);
+int lss_master_activate_bit_timing(lss_master *m, uint16_t delay_ms, uint64_t now);
+int lss_master_store(lss_master *m, uint64_t now);
+/* field LSS_FIELD_VENDOR..SERIAL, or LSS_FIELD_COUNT for the node-ID */
+int lss_master_inquire(lss_master *m, unsigned field, uint64_t now);
+/* all four fields of the slave in configuration, each answer checked */
+int lss_master_inquire_identity(lss_master *m, uint64_t now);
+int lss_master_identify_remote(lss_master *m, const lss_identify_range *r, uint64_t now);
+int lss_master_identify_non_configured(lss_master *m, uint64_t now);
+/* one slave found by fastscan is left in configuration state (result.id) */
+int lss_master_fastscan(lss_master *m, const lss_fastscan_known *known, uint64_t now);
+/* NMT command (unconfirmed) */
+int lss_master_nmt(lss_master *m, enum nmt_cs cs, uint8_t node_id, uint64_t now);
+
+/* ---- procedures ---- */
+/* Every non-configured slave by fastscan, nothing assigned; all back in waiting. */
+int lss_master_enumerate(lss_master *m, const lss_fastscan_known *known, uint64_t now);
+/* Every slave (configured or not) in the ranges by identify-remote bisection,
+ * each verified by selective switch and asked its node-ID; all back in waiting. */
+int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now);
+
+enum lss_assign_flags {
+        LSS_ASSIGN_STORE = 1u << 0,  /* Store Configuration after configuring */
+        LSS_ASSIGN_VERIFY = 1u << 1, /* wait for the boot-up at the new node-ID */
+};
+/* Give the slave with this identity a node-ID: selective switch, inquire the
+ * node-ID (nothing is sent if it already has it), configure, store, back to
+ * waiting, verify by boot-up (NMT Reset Communication for a configured slave). */
+int lss_master_assign(lss_master *m, const lss_identity *id, uint8_t node_id, unsigned flags, uint64_t now);
+/* Find one non-configured slave by fastscan, check it by inquiry, give it a
+ * node-ID as lss_master_assign() does. result.id tells which slave it was. */
+int lss_master_fastscan_assign(lss_master *m, const lss_fastscan_known *known, uint8_t node_id, unsigned flags,
+                               uint64_t now);
+
+/* ---- driving ---- */
+void lss_master_on_frame(lss_master *m, const lss_frame *f, uint64_t rx_us);
+void lss_master_on_time(lss_master *m, uint64_t now);
+/* The frames handed out were written at `now` (timeouts run from here). */
+void lss_master_on_sent(lss_master *m, uint64_t now);
+/* The transport lost received frames (SO_RXQ_OVFL): the running step is void. */
+void lss_master_on_rx_lost(lss_master *m, uint64_t now);
+/* The transport failed: ends the operation with LSS_E_BUS_DOWN or LSS_E_BUS_OFF. */
+void lss_master_on_bus_error(lss_master *m, enum lss_status status, const char *why, uint64_t now);
+/* Stop the running operation; slaves are switched back to waiting, the
+ * result is LSS_E_CANCELLED. */
+void lss_master_cancel(lss_master *m, uint64_t now);
+
+bool lss_master_next_tx(lss_master *m, lss_frame *f);
+uint64_t lss_master_deadline(const lss_master *m); /* UINT64_MAX: none */
+bool lss_master_busy(const lss_master *m);
+bool lss_master_done(const lss_master *m);          /* an operation finished and its result is there */
+const lss_result *lss_master_result(const lss_master *m);
+const lss_master_stats *lss_master_get_stats(const lss_master *m);

@@ -1,0 +1,143 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* One exchange on the bus: send the request frame(s), then wait for the
+ * answer under the rules of lss_timing.h. Strict acceptance: a frame counts
+ * only if it arrived after the request went out (stale frames are drained by
+ * time), is a valid LSS response (0x7E4, DLC 8, no EFF/RTR/FD) and carries the
+ * cs this step expects. Identical answers count once. */
+#include <string.h>
+
+#include "lss/lss_internal.h"
+
+void step_lss(lss_master *m, int expect_cs, bool multi) {
+        m->step = (lss_step) {
+                .kind = STEP_LSS,
+                .expect_cs = expect_cs,
+                .multi = multi,
+        };
+}
+
+void step_add_tx(lss_master *m, const lss_frame *f) {
+        if (m->step.n_tx < LSS_MAX_TX)
+                m->step.tx[m->step.n_tx++] = *f;
+}
+
+void step_start(lss_master *m) {
+        lss_step *s = &m->step;
+
+        for (unsigned i = 0; i < s->n_tx; i++)
+                if (m->txq_len < sizeof(m->txq) / sizeof(m->txq[0])) {
+                        m->txq[(m->txq_head + m->txq_len) % 16] = s->tx[i];
+                        m->txq_len++;
+                }
+        /* everything still queued goes on the wire ahead of the answer
+         * (e.g. an unconfirmed switch sent just before) */
+        for (unsigned i = 0; i < m->txq_len; i++)
+                s->tx_us += lss_timing_frame_us(&m->timing, &m->txq[(m->txq_head + i) % 16]);
+        s->sent_at = m->now;
+        s->phase = PHASE_WAIT;
+        m->stats.steps++;
+        /* unconfirmed request without a wait: done as soon as it is out */
+        if (s->kind == STEP_LSS && s->expect_cs < 0)
+                s->phase = PHASE_DONE;
+}
+
+static bool step_matches(const lss_step *s, const lss_frame *f) {
+        if (s->kind == STEP_BOOTUP) {
+                uint8_t node, state;
+                return bootup_decode(f, &node, &state) && node == s->bootup_node && state == 0;
+        }
+        return s->kind == STEP_LSS && lss_is_response(f) && f->data[0] == (uint8_t) s->expect_cs;
+}
+
+void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
+        lss_step *s = &m->step;
+
+        if (s->phase != PHASE_WAIT && s->phase != PHASE_ANSWER_GUARD && s->phase != PHASE_LATE_GUARD) {
+                m->stats.ignored_frames++;
+                return;
+        }
+        /* A slave answers only after the whole request is on the wire: anything
+         * complete before that was queued earlier (the drain rule). */
+        if (rx < s->sent_at + s->tx_us) {
+                m->stats.stale_frames++;
+                return;
+        }
+        if (!step_matches(s, f)) {
+                m->stats.ignored_frames++;
+                return;
+        }
+        if (s->n_answers == 0) {
+                /* the first answer decides the step: its latency is what the wait is for */
+                if (s->kind == STEP_LSS)
+                        lss_timing_add_sample(&m->timing, (uint32_t) (rx - s->sent_at - s->tx_us));
+                s->answer = *f;
+                s->n_answers = 1;
+                s->first_at = rx;
+                if (s->phase == PHASE_LATE_GUARD) {
+                        s->late = true;
+                        m->stats.late_answers++;
+                }
+                s->phase = PHASE_ANSWER_GUARD;
+                s->end_at = rx + lss_timing_answer_guard(&m->timing);
+                return;
+        }
+        /* more answers queue behind each other on the wire: wait until the
+         * last one is in, so none of them leaks into the next step */
+        s->end_at = rx + lss_timing_answer_guard(&m->timing);
+        /* two boot-ups of one node-ID: two devices took it (duplicate identity) */
+        if (s->kind == STEP_BOOTUP || memcmp(s->answer.data, f->data, 8) != 0) {
+                /* a second, different answer: more than one responder */
+                if (s->n_answers == 1)
+                        m->stats.conflicts++;
+                s->n_answers = 2;
+        }
+}
+
+uint64_t step_deadline(const lss_master *m) {
+        const lss_step *s = &m->step;
+
+        switch (s->phase) {
+        case PHASE_WAIT:
+                if (s->kind == STEP_LSS)
+                        return s->sent_at + s->tx_us + lss_timing_wait(&m->timing, s->discovery);
+                return s->sent_at + s->tx_us + s->wait_us;
+        case PHASE_ANSWER_GUARD:
+        case PHASE_LATE_GUARD:
+                return s->end_at;
+        default:
+                return UINT64_MAX;
+        }
+}
+
+void step_on_time(lss_master *m, uint64_t now) {
+        lss_step *s = &m->step;
+        uint64_t d = step_deadline(m);
+
+        if (d == UINT64_MAX || now < d)
+                return;
+        switch (s->phase) {
+        case PHASE_WAIT:
+                if (s->kind != STEP_LSS) {
+                        s->phase = PHASE_DONE;
+                        return;
+                }
+                m->stats.timeouts++;
+                s->phase = PHASE_LATE_GUARD;
+                s->end_at = d + lss_timing_late_guard(&m->timing, s->discovery);
+                return;
+        case PHASE_ANSWER_GUARD:
+        case PHASE_LATE_GUARD:
+                s->phase = PHASE_DONE;
+                return;
+        default:
+                return;
+        }
+}
+
+bool step_answered(const lss_master *m) {
+        return m->step.n_answers > 0 && !m->step.void_;
+}
+
+bool step_conflict(const lss_master *m) {
+        return m->step.n_answers > 1;
+}

@@ -1,0 +1,84 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include "lss/lss_timing.h"
+
+#include <string.h>
+
+void lss_timing_config_default(lss_timing_config *c) {
+        *c = (lss_timing_config) {
+                .timeout_us = 20000,
+                .adaptive = true,
+                .floor_us = 1000,
+                .factor_pct = 150,
+                .guard_floor_us = 300,
+                .bootup_timeout_us = 1000000,
+                .bitrate = 125000,
+                .retries = 3,
+        };
+}
+
+void lss_timing_init(lss_timing *t, const lss_timing_config *cfg) {
+        memset(t, 0, sizeof(*t));
+        t->cfg = *cfg;
+        if (t->cfg.retries == 0)
+                t->cfg.retries = 1;
+        if (t->cfg.factor_pct < 100)
+                t->cfg.factor_pct = 100;
+}
+
+void lss_timing_add_sample(lss_timing *t, uint32_t latency_us) {
+        t->samples[t->next] = latency_us;
+        t->next = (t->next + 1) % LSS_LATENCY_WINDOW;
+        if (t->n_samples < LSS_LATENCY_WINDOW)
+                t->n_samples++;
+}
+
+uint32_t lss_timing_max(const lss_timing *t) {
+        uint32_t m = 0;
+        for (unsigned i = 0; i < t->n_samples; i++)
+                if (t->samples[i] > m)
+                        m = t->samples[i];
+        return m;
+}
+
+uint32_t lss_timing_min(const lss_timing *t) {
+        uint32_t m = UINT32_MAX;
+        for (unsigned i = 0; i < t->n_samples; i++)
+                if (t->samples[i] < m)
+                        m = t->samples[i];
+        return t->n_samples ? m : 0;
+}
+
+uint32_t lss_timing_wait(const lss_timing *t, bool discovery) {
+        if (!t->cfg.adaptive || discovery || t->n_samples == 0)
+                return t->cfg.timeout_us;
+        uint64_t w = (uint64_t) lss_timing_max(t) * t->cfg.factor_pct / 100;
+        if (w < t->cfg.floor_us)
+                w = t->cfg.floor_us;
+        /* the configured timeout caps it: a stray frame taken for a very late
+         * answer must not make every later wait longer and longer */
+        if (w > t->cfg.timeout_us)
+                w = t->cfg.timeout_us;
+        return (uint32_t) w;
+}
+
+/* Worst-case time of an 8-byte standard frame: 135 bits with stuffing. */
+static uint32_t answer_frame_us(const lss_timing *t) {
+        return t->cfg.bitrate ? (uint32_t) (135ull * 1000000 / t->cfg.bitrate) : 0;
+}
+
+uint32_t lss_timing_answer_guard(const lss_timing *t) {
+        uint32_t spread = lss_timing_max(t) - lss_timing_min(t);
+        uint32_t g = spread > t->cfg.guard_floor_us ? spread : t->cfg.guard_floor_us;
+        return g + answer_frame_us(t);
+}
+
+uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery) {
+        uint32_t g = lss_timing_wait(t, discovery) / 4;
+        return g > t->cfg.guard_floor_us ? g : t->cfg.guard_floor_us;
+}
+
+uint32_t lss_timing_frame_us(const lss_timing *t, const lss_frame *f) {
+        if (!t->cfg.bitrate)
+                return 0;
+        return (uint32_t) (((uint64_t) can_frame_bits(f) * 1000000 + t->cfg.bitrate - 1) / t->cfg.bitrate);
+}

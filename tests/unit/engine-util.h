@@ -1,0 +1,86 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Helpers shared by the engine tests: buses of random slaves, driving. */
+#pragma once
+
+#include <check.h>
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lss/lss_master.h"
+#include "sim/lss_drive.h"
+#include "sim/membus.h"
+
+#define SECOND 1000000ull
+
+static inline uint64_t test_rand(uint64_t *s) {
+        uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+}
+
+/* n slaves with random, distinct identities; vendor/product fixed if nonzero. */
+static inline membus *bus_random(size_t n, uint64_t seed, uint32_t vendor, uint32_t product,
+                                 const lss_slave_faults *faults) {
+        membus *b = membus_new(125000);
+        ck_assert_ptr_nonnull(b);
+        for (size_t i = 0; i < n; i++) {
+                lss_identity id = {
+                        .vendor = vendor ? vendor : (uint32_t) test_rand(&seed),
+                        .product = product ? product : (uint32_t) test_rand(&seed),
+                        .revision = (uint32_t) test_rand(&seed),
+                        .serial = (uint32_t) test_rand(&seed),
+                };
+                membus_add_slave(b, &id, LSS_NODE_ID_UNCONFIGURED, faults);
+        }
+        return b;
+}
+
+static inline lss_slave_faults faults_latency(uint32_t latency_us, uint32_t jitter_us) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.latency_us = latency_us;
+        f.jitter_us = jitter_us;
+        return f;
+}
+
+static inline lss_master *master_default(void) {
+        lss_timing_config c;
+        lss_timing_config_default(&c);
+        lss_master *m = lss_master_new(&c);
+        ck_assert_ptr_nonnull(m);
+        return m;
+}
+
+static inline const lss_result *run(lss_master *m, membus *b) {
+        return lss_drive(m, b, 600 * SECOND, NULL, NULL);
+}
+
+static inline bool all_waiting(membus *b) {
+        for (size_t i = 0; i < membus_slave_count(b); i++)
+                if (membus_slave(b, i)->st.configuration)
+                        return false;
+        return true;
+}
+
+/* Every device in the result is a real slave of the bus, each at most once. */
+static inline void assert_devices_real(membus *b, const lss_result *r) {
+        for (size_t i = 0; i < r->n_devices; i++) {
+                lss_slave *s = membus_find(b, &r->devices[i].id);
+                ck_assert_msg(s != NULL, "device %zu (%08x:%08x:%08x:%08x) is not on the bus", i,
+                              r->devices[i].id.vendor, r->devices[i].id.product, r->devices[i].id.revision,
+                              r->devices[i].id.serial);
+                ck_assert_uint_eq(r->devices[i].node_id, s->st.active_node_id);
+                for (size_t j = 0; j < i; j++)
+                        ck_assert(!lss_identity_equal(&r->devices[i].id, &r->devices[j].id));
+        }
+}
+
+static inline int run_suite(Suite *s) {
+        SRunner *sr = srunner_create(s);
+        srunner_run_all(sr, CK_NORMAL);
+        int failed = srunner_ntests_failed(sr);
+        srunner_free(sr);
+        return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}

@@ -1,0 +1,450 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Raw services, error codes, strict acceptance, timing rules. */
+#include "engine-util.h"
+
+static const lss_identity ID1 = { 0x000000EC, 0x00001234, 0x00010002, 0x00001276 };
+
+static membus *one_slave(uint8_t node_id, const lss_slave_faults *f) {
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, node_id, f);
+        return b;
+}
+
+static void to_configuration(lss_master *m, membus *b) {
+        ck_assert_int_eq(lss_master_switch_global(m, LSS_MODE_CONFIGURATION, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        ck_assert(membus_slave(b, 0)->st.configuration);
+}
+
+/* The seed example, driven through the engine: node-ID 0x44, store, boot-up. */
+START_TEST(seed_example_through_engine) {
+        membus *b = one_slave(0xFF, NULL);
+        lss_master *m = master_default();
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_configure_node_id(m, 0x44, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_int_eq(lss_master_store(m, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.stored_node_id, 0x44);
+        ck_assert_int_eq(lss_master_switch_global(m, LSS_MODE_WAITING, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 0x44);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(inquire_every_field) {
+        membus *b = one_slave(0x05, NULL);
+        lss_master *m = master_default();
+        to_configuration(m, b);
+        for (unsigned f = 0; f < LSS_FIELD_COUNT; f++) {
+                ck_assert_int_eq(lss_master_inquire(m, f, membus_now(b)), 0);
+                const lss_result *r = run(m, b);
+                ck_assert_int_eq(r->status, LSS_OK);
+                ck_assert_uint_eq(r->value, lss_identity_field(&ID1, f));
+        }
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        ck_assert_uint_eq(run(m, b)->node_id, 5);
+        ck_assert_int_eq(lss_master_inquire_identity(m, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert(lss_identity_equal(&r->id, &ID1));
+        ck_assert_int_eq(lss_master_inquire(m, 7, membus_now(b)), -EINVAL);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(selective_switch_hit_and_miss) {
+        membus *b = one_slave(0xFF, NULL);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_switch_selective(m, &ID1, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert(r->found);
+        ck_assert(membus_slave(b, 0)->st.configuration);
+        lss_identity other = ID1;
+        other.serial++;
+        ck_assert_int_eq(lss_master_switch_global(m, LSS_MODE_WAITING, membus_now(b)), 0);
+        run(m, b);
+        ck_assert_int_eq(lss_master_switch_selective(m, &other, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_NO_RESPONSE);
+        ck_assert(!r->found);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Every error code of the confirmed services reaches the result. */
+START_TEST(error_codes) {
+        lss_master *m = master_default();
+        /* node-ID out of range: the slave says 1 (the engine refuses 0 and 128 itself) */
+        ck_assert_int_eq(lss_master_configure_node_id(m, 0, 0), -EINVAL);
+        ck_assert_int_eq(lss_master_configure_node_id(m, 128, 0), -EINVAL);
+
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.configure_error_specific = true;
+        membus *b = one_slave(0xFF, &f);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_configure_node_id(m, 3, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_REJECTED);
+        ck_assert_uint_eq(r->err, 255);
+        ck_assert_uint_eq(r->spec, 0x42);
+        ck_assert_ptr_nonnull(strstr(r->message, "error 255"));
+        membus_free(b);
+
+        lss_slave_faults_default(&f);
+        f.store_unsupported = true;
+        b = one_slave(0xFF, &f);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_store(m, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_REJECTED);
+        ck_assert_uint_eq(r->err, 1);
+        membus_free(b);
+
+        lss_slave_faults_default(&f);
+        f.store_fails = true;
+        b = one_slave(0xFF, &f);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_store(m, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_REJECTED);
+        ck_assert_uint_eq(r->err, 2);
+        membus_free(b);
+
+        lss_slave_faults_default(&f);
+        f.bit_index_unsupported = 1u << 5;
+        b = one_slave(0xFF, &f);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_configure_bit_timing(m, 0, 5, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_REJECTED);
+        ck_assert_uint_eq(r->err, 1);
+        ck_assert_int_eq(lss_master_configure_bit_timing(m, 0, 2, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        ck_assert_int_eq(lss_master_configure_bit_timing(m, 1, 2, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_REJECTED);
+        ck_assert_int_eq(lss_master_activate_bit_timing(m, 16, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        lss_drive_idle(b, 40000);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.bit_index, 2);
+        membus_free(b);
+
+        /* silent configure bit timing is a failure, never a success */
+        lss_slave_faults_default(&f);
+        f.bit_timing_silent = true;
+        b = one_slave(0xFF, &f);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_configure_bit_timing(m, 0, 2, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        membus_free(b);
+        lss_master_free(m);
+}
+END_TEST
+
+/* No slave in configuration: a confirmed service times out; a silent slave too. */
+START_TEST(no_answer_is_never_success) {
+        lss_master *m = master_default();
+        membus *b = one_slave(0xFF, NULL);
+        ck_assert_int_eq(lss_master_configure_node_id(m, 3, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_NO_RESPONSE);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.pending_node_id, 0xFF);
+        membus_free(b);
+
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.silent = true;
+        b = one_slave(0xFF, &f);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_store(m, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        membus_free(b);
+
+        lss_slave_faults_default(&f);
+        f.ignore_cs = LSS_CS_INQUIRE_NODE_ID;
+        b = one_slave(0x10, &f);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_SERIAL, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        membus_free(b);
+
+        /* a wrong DLC answer is not an answer */
+        lss_slave_faults_default(&f);
+        f.wrong_dlc = true;
+        b = one_slave(0x10, &f);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_SERIAL, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        ck_assert_uint_ge(lss_master_get_stats(m)->ignored_frames, 1);
+        membus_free(b);
+        lss_master_free(m);
+}
+END_TEST
+
+/* Two slaves in configuration answering differently: a conflict, not a value. */
+START_TEST(two_in_configuration_conflict) {
+        membus *b = membus_new(125000);
+        lss_identity id2 = ID1;
+        id2.serial = 0x2468;
+        lss_slave_faults f = faults_latency(500, 0);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        f.latency_us = 900;
+        membus_add_slave(b, &id2, 0xFF, &f);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_switch_global(m, LSS_MODE_CONFIGURATION, membus_now(b)), 0);
+        run(m, b);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_SERIAL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_CONFLICT);
+        ck_assert_uint_ge(lss_master_get_stats(m)->conflicts, 1);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Duplicated identical answers count once. */
+START_TEST(duplicate_answers_count_once) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.duplicate_answers = true;
+        membus *b = one_slave(0x22, &f);
+        lss_master *m = master_default();
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->node_id, 0x22);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Look-alikes of the expected answer are ignored: EFF, RTR, DLC 4, wrong cs, FD. */
+static void inject_lookalikes(void *ud, membus *bus, lss_master *m) {
+        int *done = ud;
+        if (*done)
+                return;
+        *done = 1;
+        uint64_t t = membus_now(bus) + 50;
+        lss_frame f;
+        lss_frame_response(&f, LSS_CS_INQUIRE_NODE_ID);
+        f.data[1] = 0x66;
+        lss_frame x = f;
+        x.flags = LSS_FRAME_EFF;
+        membus_inject(bus, &x, t);
+        x = f;
+        x.flags = LSS_FRAME_RTR;
+        membus_inject(bus, &x, t + 1);
+        x = f;
+        x.len = 4;
+        membus_inject(bus, &x, t + 2);
+        x = f;
+        x.data[0] = LSS_CS_INQUIRE_SERIAL;
+        membus_inject(bus, &x, t + 3);
+        x = f;
+        x.id = 0x7E3;
+        membus_inject(bus, &x, t + 4);
+}
+
+START_TEST(lookalikes_ignored) {
+        lss_slave_faults f = faults_latency(3000, 0);
+        membus *b = one_slave(0x22, &f);
+        lss_master *m = master_default();
+        to_configuration(m, b);
+        int done = 0;
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        const lss_result *r = lss_drive(m, b, 10 * SECOND, inject_lookalikes, &done);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->node_id, 0x22);
+        ck_assert_uint_eq(lss_master_get_stats(m)->ignored_frames + lss_master_get_stats(m)->stale_frames, 5);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* A frame received before the request went out is stale. */
+START_TEST(stale_frames_drained) {
+        membus *b = one_slave(0x22, NULL);
+        lss_master *m = master_default();
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, 1000), 0);
+        lss_frame f;
+        ck_assert(lss_master_next_tx(m, &f));
+        lss_master_on_sent(m, 1000);
+        lss_frame_response(&f, LSS_CS_INQUIRE_NODE_ID);
+        f.data[1] = 0x66;
+        lss_master_on_frame(m, &f, 999);
+        ck_assert(!lss_master_done(m));
+        ck_assert_uint_eq(lss_master_get_stats(m)->stale_frames, 1);
+        lss_master_cancel(m, 1001);
+        ck_assert(lss_master_done(m) == false); /* switch-to-waiting still queued */
+        while (lss_master_next_tx(m, &f))
+                ck_assert_uint_eq(f.data[0], LSS_CS_SWITCH_GLOBAL);
+        ck_assert(lss_master_done(m));
+        ck_assert_int_eq(lss_master_result(m)->status, LSS_E_CANCELLED);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(busy_and_bus_errors) {
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_store(m, 0), 0);
+        ck_assert(lss_master_busy(m));
+        ck_assert_int_eq(lss_master_store(m, 0), -EBUSY);
+        ck_assert_int_eq(lss_master_fastscan(m, NULL, 0), -EBUSY);
+        lss_master_on_bus_error(m, LSS_E_BUS_DOWN, "vcan0 is down", 10);
+        ck_assert(lss_master_done(m));
+        ck_assert_int_eq(lss_master_result(m)->status, LSS_E_BUS_DOWN);
+        ck_assert_str_eq(lss_master_result(m)->message, "vcan0 is down");
+        lss_frame f;
+        ck_assert(!lss_master_next_tx(m, &f));
+        ck_assert_uint_eq(lss_master_deadline(m), UINT64_MAX);
+        ck_assert_str_eq(lss_status_name(LSS_E_REJECTED), "rejected");
+        ck_assert_str_eq(lss_status_name((enum lss_status) 99), "unknown");
+        lss_master_free(m);
+}
+END_TEST
+
+/* Frames lost in the transport void the step: it is not trusted as an answer. */
+START_TEST(rx_lost_voids_step) {
+        membus *b = one_slave(0x22, NULL);
+        lss_master *m = master_default();
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        lss_master_on_rx_lost(m, membus_now(b));
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_NO_RESPONSE);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* The adaptive wait follows the measured latency, with floor and factor. */
+START_TEST(adaptive_timing) {
+        lss_timing_config c;
+        lss_timing_config_default(&c);
+        lss_slave_faults f = faults_latency(2000, 0);
+        membus *b = one_slave(0x22, &f);
+        lss_master *m = lss_master_new(&c);
+        to_configuration(m, b);
+        for (int i = 0; i < 5; i++) {
+                ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+                ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        }
+        const lss_master_stats *st = lss_master_get_stats(m);
+        /* latency = 2 ms + the answer frame (~1 ms at 125k) */
+        ck_assert_uint_ge(st->latency_max_us, 2800);
+        ck_assert_uint_le(st->latency_max_us, 3300);
+        ck_assert_uint_eq(st->timeout_us, st->latency_max_us * 150 / 100);
+
+        /* fixed mode waits what it is told */
+        c.adaptive = false;
+        c.timeout_us = 7000;
+        lss_master_set_timing(m, &c);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        run(m, b);
+        ck_assert_uint_eq(lss_master_get_stats(m)->timeout_us, 7000);
+        lss_master_free(m);
+        membus_free(b);
+
+        /* the floor holds for fast slaves */
+        lss_timing_config_default(&c);
+        c.floor_us = 5000;
+        f = faults_latency(0, 0);
+        b = one_slave(0x22, &f);
+        m = lss_master_new(&c);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        run(m, b);
+        ck_assert_uint_eq(lss_master_get_stats(m)->timeout_us, 5000);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* A slave slower than the adaptive wait answers inside the late guard: the
+ * answer still counts and the wait grows. */
+START_TEST(late_answer_in_guard_counts) {
+        lss_timing_config c;
+        lss_timing_config_default(&c);
+        lss_slave_faults f = faults_latency(0, 0);
+        membus *b = one_slave(0x22, &f);
+        lss_master *m = lss_master_new(&c);
+        to_configuration(m, b);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        run(m, b);
+        uint32_t w = lss_master_get_stats(m)->timeout_us;
+        /* now the slave gets slower than the wait but inside the late guard */
+        membus_slave(b, 0)->faults.latency_us = w + 100 - 1000;
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->node_id, 0x22);
+        ck_assert_uint_ge(lss_master_get_stats(m)->late_answers, 1);
+        ck_assert_uint_gt(lss_master_get_stats(m)->timeout_us, w);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(identify_services) {
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, NULL);
+        lss_identity id2 = { 0x9A, 3, 1, 17 };
+        membus_add_slave(b, &id2, 7, NULL);
+        lss_master *m = master_default();
+        lss_identify_range r = { ID1.vendor, ID1.product, 0, 0xFFFFFFFF, 0x1276, 0x2468 };
+        ck_assert_int_eq(lss_master_identify_remote(m, &r, membus_now(b)), 0);
+        ck_assert(run(m, b)->found);
+        r.serial_lo = 0x1277;
+        ck_assert_int_eq(lss_master_identify_remote(m, &r, membus_now(b)), 0);
+        ck_assert(!run(m, b)->found);
+        r.serial_lo = 5;
+        r.serial_hi = 4;
+        ck_assert_int_eq(lss_master_identify_remote(m, &r, membus_now(b)), -EINVAL);
+        ck_assert_int_eq(lss_master_identify_non_configured(m, membus_now(b)), 0);
+        ck_assert(run(m, b)->found);
+        membus_slave(b, 0)->st.active_node_id = 9;
+        ck_assert_int_eq(lss_master_identify_non_configured(m, membus_now(b)), 0);
+        ck_assert(!run(m, b)->found);
+        ck_assert_int_eq(lss_master_nmt(m, NMT_CS_STOP, 0, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        ck_assert_int_eq(membus_slave(b, 1)->st.nmt, SLAVE_NMT_STOPPED);
+        ck_assert_int_eq(lss_master_nmt(m, NMT_CS_STOP, 200, membus_now(b)), -EINVAL);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+int main(void) {
+        Suite *s = suite_create("engine");
+        TCase *tc = tcase_create("services");
+        tcase_add_test(tc, seed_example_through_engine);
+        tcase_add_test(tc, inquire_every_field);
+        tcase_add_test(tc, selective_switch_hit_and_miss);
+        tcase_add_test(tc, error_codes);
+        tcase_add_test(tc, no_answer_is_never_success);
+        tcase_add_test(tc, two_in_configuration_conflict);
+        tcase_add_test(tc, duplicate_answers_count_once);
+        tcase_add_test(tc, lookalikes_ignored);
+        tcase_add_test(tc, stale_frames_drained);
+        tcase_add_test(tc, busy_and_bus_errors);
+        tcase_add_test(tc, rx_lost_voids_step);
+        tcase_add_test(tc, adaptive_timing);
+        tcase_add_test(tc, late_answer_in_guard_counts);
+        tcase_add_test(tc, identify_services);
+        suite_add_tcase(s, tc);
+        return run_suite(s);
+}

@@ -1,0 +1,287 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Fastscan and enumeration of non-configured slaves: many slaves, known
+ * fields, fault knobs, late and duplicated answers. */
+#include "engine-util.h"
+
+static lss_fastscan_known known_vp(uint32_t vendor, uint32_t product) {
+        lss_fastscan_known k = { 0 };
+        k.value.vendor = vendor;
+        k.value.product = product;
+        k.known_bits[LSS_FIELD_VENDOR] = 32;
+        k.known_bits[LSS_FIELD_PRODUCT] = 32;
+        return k;
+}
+
+START_TEST(fastscan_one) {
+        lss_slave_faults f = faults_latency(1000, 200);
+        membus *b = bus_random(1, 7, 0, 0, &f);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_fastscan(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert(lss_identity_equal(&r->id, &membus_slave(b, 0)->id));
+        ck_assert(membus_slave(b, 0)->st.configuration);
+        /* ping + 4 x (32 bits + confirm) */
+        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 133);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(fastscan_nobody) {
+        membus *b = bus_random(0, 7, 0, 0, NULL);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_fastscan(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_NOT_FOUND);
+        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 1);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(fastscan_known_fields) {
+        membus *b = bus_random(4, 11, 0xEC, 0x1234, NULL);
+        lss_master *m = master_default();
+        lss_fastscan_known k = known_vp(0xEC, 0x1234);
+        ck_assert_int_eq(lss_master_fastscan(m, &k, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_ptr_nonnull(membus_find(b, &r->id));
+        /* ping + 2 confirms + 2 x 33 */
+        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 69);
+        lss_master_free(m);
+        membus_free(b);
+
+        /* partially known: the top 16 bits of the serial */
+        b = membus_new(125000);
+        lss_identity id = { 1, 2, 3, 0xABCD1234 };
+        membus_add_slave(b, &id, 0xFF, NULL);
+        m = master_default();
+        k = known_vp(1, 2);
+        k.value.revision = 3;
+        k.known_bits[LSS_FIELD_REVISION] = 32;
+        k.value.serial = 0xABCD0000;
+        k.known_bits[LSS_FIELD_SERIAL] = 16;
+        ck_assert_int_eq(lss_master_fastscan(m, &k, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert(lss_identity_equal(&r->id, &id));
+        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 1 + 3 + 16 + 1);
+        k.known_bits[0] = 33;
+        ck_assert_int_eq(lss_master_fastscan(m, &k, membus_now(b)), -EINVAL);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* A wrong known value: nobody confirms it; a clear outcome, no identity. */
+START_TEST(fastscan_wrong_known_value) {
+        membus *b = bus_random(2, 13, 0xEC, 0x1234, NULL);
+        lss_master *m = master_default();
+        lss_fastscan_known k = known_vp(0xED, 0x1234);
+        ck_assert_int_eq(lss_master_fastscan(m, &k, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_INCOMPLETE);
+        ck_assert(!r->found);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+static void enumerate_n(size_t n, uint64_t seed, bool known) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = bus_random(n, seed, known ? 0xEC : 0, known ? 0x1234 : 0, &f);
+        lss_master *m = master_default();
+        lss_fastscan_known k = known_vp(0xEC, 0x1234);
+        ck_assert_int_eq(lss_master_enumerate(m, known ? &k : NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "n=%zu: %s", n, r->message);
+        ck_assert_uint_eq(r->n_devices, n);
+        assert_devices_real(b, r);
+        ck_assert(all_waiting(b));
+        for (size_t i = 0; i < n; i++) {
+                ck_assert_uint_eq(membus_slave(b, i)->st.active_node_id, 0xFF);
+                ck_assert_uint_eq(r->devices[i].node_id, 0xFF);
+        }
+        lss_master_free(m);
+        membus_free(b);
+}
+
+START_TEST(enumerate_1) { enumerate_n(1, 1, false); enumerate_n(1, 2, true); }
+END_TEST
+START_TEST(enumerate_8) { enumerate_n(8, 3, false); enumerate_n(8, 4, true); }
+END_TEST
+START_TEST(enumerate_32) { enumerate_n(32, 5, false); enumerate_n(32, 6, true); }
+END_TEST
+START_TEST(enumerate_127) { enumerate_n(127, 7, false); enumerate_n(127, 8, true); }
+END_TEST
+
+/* Configured slaves are not found by fastscan, unless they deviate. */
+START_TEST(enumerate_skips_configured) {
+        membus *b = bus_random(3, 21, 0, 0, NULL);
+        membus_slave(b, 1)->st.active_node_id = 9;
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->n_devices, 2);
+        assert_devices_real(b, r);
+        lss_master_free(m);
+        membus_free(b);
+
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.fastscan_when_configured = true;
+        b = bus_random(3, 21, 0, 0, &f);
+        membus_slave(b, 1)->st.active_node_id = 9;
+        m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->n_devices, 3);
+        /* its real node-ID is reported, read by inquiry */
+        assert_devices_real(b, r);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* CANopenNode slaves have no identify services: the ping alone finds them. */
+START_TEST(enumerate_without_identify) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.no_identify = true;
+        membus *b = bus_random(5, 31, 0, 0, &f);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->n_devices, 5);
+        assert_devices_real(b, r);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Silent slaves and slaves that want NMT Stopped are not found; no error. */
+START_TEST(enumerate_silent_and_nmt_stopped) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.needs_nmt_stopped = true;
+        membus *b = bus_random(3, 41, 0, 0, &f);
+        membus_slave(b, 0)->faults.silent = true;
+        membus_slave(b, 0)->faults.needs_nmt_stopped = false;
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->n_devices, 0);
+        ck_assert_int_eq(lss_master_nmt(m, NMT_CS_STOP, 0, membus_now(b)), 0);
+        run(m, b);
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->n_devices, 2);
+        assert_devices_real(b, r);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* A slave entering configuration before all four fields matched: never a
+ * wrong identity; the others are still found. */
+START_TEST(enumerate_early_config) {
+        for (int e = SLAVE_EARLY_AFTER_VENDOR; e <= SLAVE_EARLY_AFTER_REVISION; e++) {
+                membus *b = bus_random(4, 51 + (uint64_t) e, 0xEC, 0x1234, NULL);
+                membus_slave(b, 2)->faults.early_config = (enum lss_slave_early_config) e;
+                lss_master *m = master_default();
+                ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+                const lss_result *r = run(m, b);
+                assert_devices_real(b, r);
+                ck_assert_uint_ge(r->n_devices, 3);
+                ck_assert(all_waiting(b));
+                lss_master_free(m);
+                membus_free(b);
+        }
+}
+END_TEST
+
+START_TEST(enumerate_duplicate_answers) {
+        lss_slave_faults f = faults_latency(800, 400);
+        f.duplicate_answers = true;
+        membus *b = bus_random(8, 61, 0, 0, &f);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->n_devices, 8);
+        assert_devices_real(b, r);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Fake "late" 0x4F answers injected right after step deadlines: they land in
+ * the late guard or in the next step. Identities must stay right. */
+typedef struct late_injector {
+        uint64_t rng, last_deadline;
+        unsigned injected, every;
+        uint8_t cs;
+} late_injector;
+
+static void inject_late(void *ud, membus *bus, lss_master *m) {
+        late_injector *li = ud;
+        uint64_t d = lss_master_deadline(m);
+        if (d == UINT64_MAX || d == li->last_deadline)
+                return;
+        li->last_deadline = d;
+        if (test_rand(&li->rng) % li->every != 0)
+                return;
+        lss_frame f;
+        lss_frame_response(&f, li->cs);
+        membus_inject(bus, &f, d + 1 + test_rand(&li->rng) % 1500);
+        li->injected++;
+}
+
+START_TEST(enumerate_with_late_answers) {
+        for (uint64_t seed = 1; seed <= 6; seed++) {
+                lss_slave_faults f = faults_latency(1000, 300);
+                membus *b = bus_random(8, 70 + seed, 0, 0, &f);
+                lss_master *m = master_default();
+                late_injector li = { .rng = seed, .every = 25, .cs = LSS_CS_IDENTIFY_SLAVE };
+                ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+                const lss_result *r = lss_drive(m, b, 600 * SECOND, inject_late, &li);
+                ck_assert_uint_gt(li.injected, 20);
+                assert_devices_real(b, r);
+                ck_assert_msg(r->status == LSS_OK, "seed %u: %s", (unsigned) seed, r->message);
+                ck_assert_uint_eq(r->n_devices, 8);
+                ck_assert(all_waiting(b));
+                lss_master_free(m);
+                membus_free(b);
+        }
+}
+END_TEST
+
+int main(void) {
+        Suite *s = suite_create("fastscan");
+        TCase *tc = tcase_create("fastscan");
+        tcase_set_timeout(tc, 120);
+        tcase_add_test(tc, fastscan_one);
+        tcase_add_test(tc, fastscan_nobody);
+        tcase_add_test(tc, fastscan_known_fields);
+        tcase_add_test(tc, fastscan_wrong_known_value);
+        tcase_add_test(tc, enumerate_1);
+        tcase_add_test(tc, enumerate_8);
+        tcase_add_test(tc, enumerate_32);
+        tcase_add_test(tc, enumerate_127);
+        tcase_add_test(tc, enumerate_skips_configured);
+        tcase_add_test(tc, enumerate_without_identify);
+        tcase_add_test(tc, enumerate_silent_and_nmt_stopped);
+        tcase_add_test(tc, enumerate_early_config);
+        tcase_add_test(tc, enumerate_duplicate_answers);
+        tcase_add_test(tc, enumerate_with_late_answers);
+        suite_add_tcase(s, tc);
+        return run_suite(s);
+}
