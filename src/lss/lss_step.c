@@ -57,8 +57,10 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                 return;
         }
         /* A slave answers only after the whole request is on the wire: anything
-         * complete before that was queued earlier (the drain rule). */
-        if (rx < s->sent_at + s->tx_us) {
+         * complete before that was queued earlier (the drain rule). A boot-up
+         * may overtake our queued frames (an NMT frame wins arbitration), so
+         * for it only "before we sent" is stale. */
+        if (rx < s->sent_at + (s->kind == STEP_LSS ? s->tx_us : 0)) {
                 m->stats.stale_frames++;
                 return;
         }

@@ -1,0 +1,313 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Giving node-IDs: by known identity (selective switch) and by fastscan. */
+#include "engine-util.h"
+
+static const lss_identity ID1 = { 0x000000EC, 0x00001234, 0x00010002, 0x00001276 };
+
+typedef struct frame_count {
+        unsigned configure, store, lss, bootups;
+} frame_count;
+
+static void count_frames(void *ud, const lss_frame *f, uint64_t t) {
+        frame_count *c = ud;
+        if (lss_is_request(f)) {
+                c->lss++;
+                c->configure += f->data[0] == LSS_CS_CONFIGURE_NODE_ID;
+                c->store += f->data[0] == LSS_CS_STORE;
+        } else if (lss_is_response(f))
+                c->lss++;
+        else if (bootup_decode(f, NULL, NULL))
+                c->bootups++;
+}
+
+START_TEST(assign_non_configured) {
+        lss_slave_faults f = faults_latency(1000, 0);
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        frame_count c = { 0 };
+        membus_set_trace(b, count_frames, &c);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert(r->changed);
+        ck_assert_uint_eq(r->node_id, 0xFF);
+        lss_slave *s = membus_slave(b, 0);
+        ck_assert_uint_eq(s->st.active_node_id, 5);
+        ck_assert_uint_eq(s->st.stored_node_id, 5);
+        ck_assert(all_waiting(b));
+        /* 4+1 selective, 2 inquire node-ID, 2 configure, 2 store, 1 switch back */
+        ck_assert_uint_eq(c.lss, 12);
+        ck_assert_uint_eq(c.bootups, 1);
+
+        /* second time: already right, nothing configured or stored */
+        c = (frame_count) { 0 };
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert(!r->changed);
+        ck_assert_uint_eq(c.configure, 0);
+        ck_assert_uint_eq(c.store, 0);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* A configured slave takes the new ID at NMT Reset Communication. */
+START_TEST(assign_configured) {
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 9, NULL);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 12, LSS_ASSIGN_VERIFY, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->node_id, 9);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 12);
+        /* not stored: a power cycle brings the old one back */
+        ck_assert_uint_eq(membus_slave(b, 0)->st.stored_node_id, 9);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(assign_failures) {
+        lss_master *m = master_default();
+        membus *b = membus_new(125000);
+        lss_identity absent = ID1;
+        absent.serial = 1;
+        membus_add_slave(b, &ID1, 0xFF, NULL);
+        ck_assert_int_eq(lss_master_assign(m, &absent, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_NOT_FOUND);
+        ck_assert(all_waiting(b));
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 0, 0, membus_now(b)), -EINVAL);
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 128, 0, membus_now(b)), -EINVAL);
+        membus_free(b);
+
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.store_unsupported = true;
+        b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_REJECTED);
+        ck_assert_uint_eq(r->err, 1);
+        ck_assert(all_waiting(b));
+        membus_free(b);
+
+        lss_slave_faults_default(&f);
+        f.configure_error_specific = true;
+        b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_REJECTED);
+        ck_assert_uint_eq(r->err, 255);
+        ck_assert_uint_eq(r->spec, 0x42);
+        ck_assert(all_waiting(b));
+        ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 0xFF);
+        membus_free(b);
+
+        lss_slave_faults_default(&f);
+        f.ignore_cs = LSS_CS_STORE;
+        b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        ck_assert(all_waiting(b));
+        membus_free(b);
+
+        lss_slave_faults_default(&f);
+        f.ignore_cs = LSS_CS_CONFIGURE_NODE_ID;
+        b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        membus_free(b);
+
+        lss_slave_faults_default(&f);
+        f.ignore_cs = LSS_CS_INQUIRE_NODE_ID;
+        b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        membus_free(b);
+        lss_master_free(m);
+}
+END_TEST
+
+/* Duplicate identity: two devices boot up as the same node: reported. */
+START_TEST(assign_duplicate_identity) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(200, 0);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        f.latency_us = 1500;
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_VERIFY, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_CONFLICT);
+        ck_assert_ptr_nonnull(strstr(r->message, "duplicate"));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* The boot-up does not come within the wait: not verified, and said so. */
+START_TEST(assign_not_verified) {
+        lss_slave_faults f = faults_latency(5000, 0);
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        lss_timing_config c;
+        lss_timing_config_default(&c);
+        c.bootup_timeout_us = 2000; /* the slave needs 5 ms to boot */
+        lss_master *m = lss_master_new(&c);
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 8, LSS_ASSIGN_VERIFY, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_VERIFY);
+        ck_assert_ptr_nonnull(strstr(r->message, "no boot-up from node 8"));
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+static void fastscan_assign_all(size_t n, uint64_t seed, bool known, unsigned every_late) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = bus_random(n, seed, known ? 0xEC : 0, known ? 0x1234 : 0, &f);
+        lss_master *m = master_default();
+        lss_fastscan_known k = { 0 };
+        if (known) {
+                k.value.vendor = 0xEC;
+                k.value.product = 0x1234;
+                k.known_bits[0] = k.known_bits[1] = 32;
+        }
+        lss_identity *given = calloc(n, sizeof(*given));
+        for (size_t i = 0; i < n; i++) {
+                ck_assert_int_eq(lss_master_fastscan_assign(m, &k, (uint8_t) (i + 1),
+                                                            LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY, membus_now(b)),
+                                 0);
+                const lss_result *r = run(m, b);
+                ck_assert_msg(r->status == LSS_OK, "node %zu: %s", i + 1, r->message);
+                given[i] = r->id;
+        }
+        ck_assert_int_eq(lss_master_fastscan_assign(m, &k, 100, LSS_ASSIGN_STORE, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NOT_FOUND);
+        /* the identity reported for node i is the slave that has node i */
+        for (size_t i = 0; i < n; i++) {
+                lss_slave *s = membus_find(b, &given[i]);
+                ck_assert_ptr_nonnull(s);
+                ck_assert_uint_eq(s->st.active_node_id, i + 1);
+                ck_assert_uint_eq(s->st.stored_node_id, i + 1);
+        }
+        ck_assert(all_waiting(b));
+        (void) every_late;
+        free(given);
+        lss_master_free(m);
+        membus_free(b);
+}
+
+START_TEST(fastscan_assign_8) { fastscan_assign_all(8, 101, false, 0); fastscan_assign_all(8, 102, true, 0); }
+END_TEST
+START_TEST(fastscan_assign_32) { fastscan_assign_all(32, 103, true, 0); }
+END_TEST
+
+/* A slave entering configuration early sits beside the one found: the
+ * inquiry check sees two and nothing is configured wrongly. */
+START_TEST(fastscan_assign_early_config) {
+        membus *b = bus_random(3, 111, 0xEC, 0x1234, NULL);
+        membus_slave(b, 1)->faults.early_config = SLAVE_EARLY_AFTER_PRODUCT;
+        lss_master *m = master_default();
+        for (int i = 0; i < 4; i++) {
+                ck_assert_int_eq(lss_master_fastscan_assign(m, NULL, (uint8_t) (10 + i), LSS_ASSIGN_VERIFY,
+                                                            membus_now(b)), 0);
+                const lss_result *r = run(m, b);
+                if (r->status == LSS_OK) {
+                        lss_slave *s = membus_find(b, &r->id);
+                        ck_assert_ptr_nonnull(s);
+                        ck_assert_uint_eq(s->st.active_node_id, 10 + i);
+                }
+                ck_assert(all_waiting(b));
+        }
+        /* nobody got a node-ID that is not its own result */
+        for (size_t i = 0; i < 3; i++) {
+                uint8_t nid = membus_slave(b, i)->st.active_node_id;
+                ck_assert(nid == 0xFF || (nid >= 10 && nid < 14));
+        }
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+typedef struct late_injector {
+        uint64_t rng, last_deadline;
+        unsigned injected;
+} late_injector;
+
+/* Any LSS answer cs injected after deadlines (0x4F, 0x11, 0x17, 0x5A..0x5E). */
+static void inject_late(void *ud, membus *bus, lss_master *m) {
+        static const uint8_t cs[] = { 0x4F, 0x44, 0x11, 0x17, 0x5A, 0x5B, 0x5C, 0x5D, 0x5E };
+        late_injector *li = ud;
+        uint64_t d = lss_master_deadline(m);
+        if (d == UINT64_MAX || d == li->last_deadline)
+                return;
+        li->last_deadline = d;
+        if (test_rand(&li->rng) % 20 != 0)
+                return;
+        lss_frame f;
+        lss_frame_response(&f, cs[test_rand(&li->rng) % sizeof(cs)]);
+        f.data[1] = (uint8_t) test_rand(&li->rng);
+        f.data[2] = (uint8_t) test_rand(&li->rng);
+        membus_inject(bus, &f, d + 1 + test_rand(&li->rng) % 1500);
+        li->injected++;
+}
+
+START_TEST(fastscan_assign_with_late_answers) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = bus_random(8, 121, 0, 0, &f);
+        lss_master *m = master_default();
+        late_injector li = { .rng = 5 };
+        unsigned ok = 0;
+        for (unsigned i = 0; i < 30 && ok < 8; i++) {
+                ck_assert_int_eq(lss_master_fastscan_assign(m, NULL, (uint8_t) (ok + 1), LSS_ASSIGN_STORE,
+                                                            membus_now(b)), 0);
+                const lss_result *r = lss_drive(m, b, 600 * SECOND, inject_late, &li);
+                if (r->status == LSS_OK) {
+                        lss_slave *s = membus_find(b, &r->id);
+                        ck_assert_ptr_nonnull(s);
+                        ck_assert_uint_eq(s->st.pending_node_id, ok + 1);
+                        ok++;
+                }
+                lss_drive_idle(b, 5000);
+        }
+        ck_assert_uint_eq(ok, 8);
+        ck_assert_uint_gt(li.injected, 20);
+        /* every slave has exactly the node-ID it was reported with */
+        for (size_t i = 0; i < 8; i++) {
+                uint8_t nid = membus_slave(b, i)->st.pending_node_id;
+                ck_assert(nid >= 1 && nid <= 8);
+                for (size_t j = 0; j < i; j++)
+                        ck_assert_uint_ne(membus_slave(b, j)->st.pending_node_id, nid);
+        }
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+int main(void) {
+        Suite *s = suite_create("assign");
+        TCase *tc = tcase_create("assign");
+        tcase_set_timeout(tc, 120);
+        tcase_add_test(tc, assign_non_configured);
+        tcase_add_test(tc, assign_configured);
+        tcase_add_test(tc, assign_failures);
+        tcase_add_test(tc, assign_duplicate_identity);
+        tcase_add_test(tc, assign_not_verified);
+        tcase_add_test(tc, fastscan_assign_8);
+        tcase_add_test(tc, fastscan_assign_32);
+        tcase_add_test(tc, fastscan_assign_early_config);
+        tcase_add_test(tc, fastscan_assign_with_late_answers);
+        suite_add_tcase(s, tc);
+        return run_suite(s);
+}

@@ -1,0 +1,164 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Slowscan: identify-remote bisection finds configured and non-configured
+ * slaves of one vendor/product, each verified, nothing changed. */
+#include "engine-util.h"
+
+static lss_identify_range full_range(uint32_t vendor, uint32_t product) {
+        return (lss_identify_range) { vendor, product, 0, UINT32_MAX, 0, UINT32_MAX };
+}
+
+static void slowscan_n(size_t n, uint64_t seed) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = bus_random(n, seed, 0xEC, 0x1234, &f);
+        /* half of them configured, at various node-IDs */
+        for (size_t i = 0; i < n; i += 2) {
+                lss_slave_state *st = &membus_slave(b, i)->st;
+                st->active_node_id = st->pending_node_id = st->stored_node_id = (uint8_t) (1 + i);
+        }
+        /* a slave of another product is not found */
+        lss_identity other = { 0xEC, 0x9999, 1, 1 };
+        membus_add_slave(b, &other, 3, &f);
+        lss_master *m = master_default();
+        lss_identify_range r = full_range(0xEC, 0x1234);
+        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
+        const lss_result *res = run(m, b);
+        ck_assert_msg(res->status == LSS_OK, "%s", res->message);
+        ck_assert_uint_eq(res->n_devices, n);
+        assert_devices_real(b, res);
+        ck_assert(all_waiting(b));
+        for (size_t i = 0; i < n; i++)
+                ck_assert_uint_eq(membus_slave(b, i)->st.pending_node_id, membus_slave(b, i)->st.active_node_id);
+        lss_master_free(m);
+        membus_free(b);
+}
+
+START_TEST(slowscan_1) { slowscan_n(1, 201); }
+END_TEST
+START_TEST(slowscan_8) { slowscan_n(8, 202); }
+END_TEST
+START_TEST(slowscan_32) { slowscan_n(32, 203); }
+END_TEST
+
+/* Range edges are inclusive: 0 and 0xFFFFFFFF revisions and serials. */
+START_TEST(slowscan_edges) {
+        membus *b = membus_new(125000);
+        const lss_identity ids[] = {
+                { 0x9A, 3, 0, 0 },
+                { 0x9A, 3, UINT32_MAX, UINT32_MAX },
+                { 0x9A, 3, 0x80000000u, 17 },
+                { 0x9A, 3, 0x80000000u, 18 },
+        };
+        for (size_t i = 0; i < 4; i++)
+                membus_add_slave(b, &ids[i], (uint8_t) (i + 1), NULL);
+        lss_master *m = master_default();
+        lss_identify_range r = full_range(0x9A, 3);
+        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
+        const lss_result *res = run(m, b);
+        ck_assert_int_eq(res->status, LSS_OK);
+        ck_assert_uint_eq(res->n_devices, 4);
+        assert_devices_real(b, res);
+        /* a narrow range finds just what is in it */
+        r.rev_lo = r.rev_hi = 0x80000000u;
+        r.serial_lo = 18;
+        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
+        res = run(m, b);
+        ck_assert_uint_eq(res->n_devices, 1);
+        ck_assert_uint_eq(res->devices[0].id.serial, 18);
+        ck_assert_uint_eq(res->devices[0].node_id, 4);
+        r.serial_lo = 20;
+        r.serial_hi = 19;
+        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), -EINVAL);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Slaves without identify services are not found by slowscan: no error. */
+START_TEST(slowscan_without_identify) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.no_identify = true;
+        membus *b = bus_random(3, 211, 0xEC, 0x1234, &f);
+        lss_master *m = master_default();
+        lss_identify_range r = full_range(0xEC, 0x1234);
+        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
+        const lss_result *res = run(m, b);
+        ck_assert_int_eq(res->status, LSS_OK);
+        ck_assert_uint_eq(res->n_devices, 0);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* A slave that answers identify but not the selective switch is dropped and
+ * reported; the others are still there. */
+START_TEST(slowscan_unverifiable) {
+        membus *b = bus_random(3, 221, 0xEC, 0x1234, NULL);
+        membus_slave(b, 1)->faults.ignore_cs = LSS_CS_SWITCH_SEL_SERIAL;
+        lss_master *m = master_default();
+        lss_identify_range r = full_range(0xEC, 0x1234);
+        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
+        const lss_result *res = run(m, b);
+        ck_assert_int_eq(res->status, LSS_E_INCOMPLETE);
+        ck_assert_uint_eq(res->n_devices, 2);
+        assert_devices_real(b, res);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Cancel in the middle: everything back to waiting. */
+static void cancel_after(void *ud, membus *bus, lss_master *m) {
+        unsigned *n = ud;
+        if (++*n == 40)
+                lss_master_cancel(m, membus_now(bus));
+}
+
+START_TEST(cancel_midway) {
+        membus *b = bus_random(4, 231, 0, 0, NULL);
+        lss_master *m = master_default();
+        unsigned n = 0;
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *res = lss_drive(m, b, 600 * SECOND, cancel_after, &n);
+        ck_assert_int_eq(res->status, LSS_E_CANCELLED);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+static void progress_cb(void *ud, double p) {
+        double *last = ud;
+        ck_assert(p >= 0 && p <= 1);
+        *last = p;
+}
+
+START_TEST(progress_reported) {
+        membus *b = bus_random(3, 241, 0, 0, NULL);
+        lss_master *m = master_default();
+        double last = -1;
+        lss_master_set_progress(m, progress_cb, &last);
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        run(m, b);
+        ck_assert(last > 0.9);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+int main(void) {
+        Suite *s = suite_create("scan");
+        TCase *tc = tcase_create("slowscan");
+        tcase_set_timeout(tc, 120);
+        tcase_add_test(tc, slowscan_1);
+        tcase_add_test(tc, slowscan_8);
+        tcase_add_test(tc, slowscan_32);
+        tcase_add_test(tc, slowscan_edges);
+        tcase_add_test(tc, slowscan_without_identify);
+        tcase_add_test(tc, slowscan_unverifiable);
+        tcase_add_test(tc, cancel_midway);
+        tcase_add_test(tc, progress_reported);
+        suite_add_tcase(s, tc);
+        return run_suite(s);
+}
