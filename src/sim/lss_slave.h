@@ -72,6 +72,12 @@ typedef struct lss_slave {
         uint64_t switch_at_us, silent_until_us;
         uint64_t now_us;
         uint64_t rng;
+        /* time the Activate Bit Timing frame was heard: the window off the
+         * bus is [activate_at_us, silent_until_us) */
+        uint64_t activate_at_us;
+        /* the slave has one transmit queue: a later frame is never ready
+         * before an earlier one, whatever the jitter */
+        uint64_t tx_ready_us;
         unsigned changes;         /* incremented on every persistent state change */
         lss_slave_emit_fn emit;
         void *userdata;
@@ -80,7 +86,9 @@ typedef struct lss_slave {
 /* node_id 1..127 or 0xFF; bit_index is the table-0 index the slave runs at. */
 void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8_t bit_index,
                     const lss_slave_faults *faults, uint64_t seed, lss_slave_emit_fn emit, void *userdata);
-/* Power cycle: stored values become active, boot-up is sent when configured. */
+/* Power cycle: stored values become active, boot-up is sent when configured.
+ * NMT Reset Node does the same (it reloads the stored values, so a pending
+ * node-ID that was not stored is lost). */
 void lss_slave_power_on(lss_slave *s, uint64_t now_us);
 /* Every frame on the bus (the slave's own excepted). */
 void lss_slave_on_frame(lss_slave *s, const lss_frame *f, uint64_t now_us);

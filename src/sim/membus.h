@@ -23,12 +23,16 @@ typedef struct membus_stats {
         uint64_t busy_us;         /* sum of frame times */
         uint64_t lss_requests;    /* 0x7E5 frames */
         uint64_t lss_responses;   /* 0x7E4 frames */
+        uint64_t dropped_frames;  /* slave frames lost: sender off the bus (rate, activation window) */
+        uint64_t merged_frames;   /* copies that went out inside an identical frame (see merge) */
 } membus_stats;
 
+/* NULL on bitrate 0 or out of memory. */
 membus *membus_new(uint32_t bitrate);
 void membus_free(membus *b);
 
-/* Adds a slave; returns its index. bit_index defaults to the bus's rate index. */
+/* Adds a slave; returns its index (SIZE_MAX when out of memory). bit_index
+ * defaults to the bus's rate index. The slave is not powered on: no boot-up. */
 size_t membus_add_slave(membus *b, const lss_identity *id, uint8_t node_id, const lss_slave_faults *faults);
 size_t membus_slave_count(const membus *b);
 lss_slave *membus_slave(membus *b, size_t i);
@@ -53,3 +57,10 @@ void membus_set_bitrate(membus *b, uint32_t bitrate);
 uint32_t membus_bitrate(const membus *b);
 /* Optional log of every frame on the wire (candump -L style lines). */
 void membus_set_trace(membus *b, void (*trace)(void *ud, const lss_frame *f, uint64_t t_us), void *ud);
+/* Seed of the slaves' jitter PRNGs; each slave added afterwards gets a seed
+ * derived from this and its index (default 0). */
+void membus_set_seed(membus *b, uint64_t seed);
+/* Identical frames (same identifier, flags, DLC and data) from different
+ * nodes that start on the same bit go out as one frame, as on a real bus
+ * (e.g. many fastscan answers). Off by default: every copy is sent. */
+void membus_set_merge_identical(membus *b, bool merge);

@@ -1,0 +1,119 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Engine bench on the in-memory bus (virtual time, 125 kbit/s, slaves with
+ * 1 ms latency + up to 0.3 ms jitter): frames and bus time to identify and
+ * give node-IDs to N non-configured slaves,
+ *   (a) blind fastscan, (b) vendor and product known, (c) full identity known.
+ * Not a test: prints a table. Correctness is still checked: every slave must
+ * end with the node-ID it was reported with, or the bench fails. */
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "lss/lss_master.h"
+#include "sim/lss_drive.h"
+#include "sim/membus.h"
+
+#define BITRATE 125000u
+#define LATENCY_US 1000u
+#define JITTER_US 300u
+
+static uint64_t rnd(uint64_t *s) {
+        uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+}
+
+enum mode { BLIND, KNOWN_VP, FULL };
+static const char *const mode_names[] = { "(a) blind fastscan", "(b) vendor+product known",
+                                          "(c) full identity known" };
+
+typedef struct row {
+        uint64_t lss_frames, all_frames, busy_us, elapsed_us;
+} row;
+
+static int run_case(enum mode mode, size_t n, uint64_t seed, row *out) {
+        membus *b = membus_new(BITRATE);
+        /* identical answers that wait for the wire together merge, as on CAN */
+        membus_set_merge_identical(b, true);
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.latency_us = LATENCY_US;
+        f.jitter_us = JITTER_US;
+        lss_identity *ids = calloc(n, sizeof(*ids));
+        for (size_t i = 0; i < n; i++) {
+                ids[i] = (lss_identity) { 0xEC, 0x1234, (uint32_t) rnd(&seed), (uint32_t) rnd(&seed) };
+                membus_add_slave(b, &ids[i], LSS_NODE_ID_UNCONFIGURED, &f);
+        }
+        lss_master *m = lss_master_new(NULL);
+        lss_fastscan_known k = { 0 };
+        if (mode == KNOWN_VP) {
+                k.value = ids[0];
+                k.known_bits[0] = k.known_bits[1] = 32;
+        }
+        int bad = 0;
+        for (size_t i = 0; i < n; i++) {
+                uint8_t nid = (uint8_t) (i + 1);
+                unsigned flags = LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY;
+                if (mode == FULL)
+                        lss_master_assign(m, &ids[i], nid, flags, membus_now(b));
+                else
+                        lss_master_fastscan_assign(m, &k, nid, flags, membus_now(b));
+                const lss_result *r = lss_drive(m, b, 3600ull * 1000000, NULL, NULL);
+                lss_slave *s = r->status == LSS_OK ? membus_find(b, &r->id) : NULL;
+                if (!s || s->st.active_node_id != nid) {
+                        fprintf(stderr, "MIS-ASSIGNMENT or failure at node %u: %s\n", nid, r->message);
+                        bad = 1;
+                }
+        }
+        const membus_stats *st = membus_get_stats(b);
+        out->lss_frames = st->lss_requests + st->lss_responses;
+        out->all_frames = st->frames;
+        out->busy_us = st->busy_us;
+        out->elapsed_us = membus_now(b);
+        lss_master_free(m);
+        membus_free(b);
+        free(ids);
+        return bad;
+}
+
+static double frame_us(const lss_frame *f) {
+        return can_frame_bits(f) * 1e6 / BITRATE;
+}
+
+int main(void) {
+        const size_t ns[] = { 1, 8, 32 };
+        int bad = 0;
+        lss_frame req, ans;
+        lss_encode_fastscan(&req, 0x12345678, 7, 3, 3);
+        lss_frame_response(&ans, LSS_CS_IDENTIFY_SLAVE);
+        /* the bus floor of one 133-step fastscan: every step needs its request
+         * on the wire, the slave's latency and (answered or not, the master
+         * cannot know earlier) the time an answer would take */
+        double fastscan_floor_us = 133 * (frame_us(&req) + LATENCY_US + frame_us(&ans));
+
+        printf("# engine on the in-memory bus: %u bit/s, slave latency %u us + jitter 0..%u us\n", BITRATE,
+               LATENCY_US, JITTER_US);
+        printf("# floor (c) = 10 LSS frames per node; floor (a) = bus floor of a 133-step fastscan = %.1f ms\n",
+               fastscan_floor_us / 1000);
+        printf("%-26s %4s %10s %10s %12s %12s %10s %10s\n", "case", "N", "LSS frames", "frames/N", "bus time ms",
+               "elapsed ms", "ms/node", "vs floor");
+        for (int mode = BLIND; mode <= FULL; mode++)
+                for (size_t i = 0; i < sizeof(ns) / sizeof(ns[0]); i++) {
+                        row r;
+                        bad |= run_case((enum mode) mode, ns[i], 1000 + ns[i], &r);
+                        double per_node = r.elapsed_us / 1000.0 / ns[i];
+                        double vs;
+                        if (mode == FULL)
+                                vs = (double) r.lss_frames / (10.0 * ns[i]);
+                        else
+                                vs = r.elapsed_us / (double) ns[i] / fastscan_floor_us;
+                        printf("%-26s %4zu %10llu %10.1f %12.1f %12.1f %10.2f %9.2fx\n", mode_names[mode], ns[i],
+                               (unsigned long long) r.lss_frames, (double) r.lss_frames / ns[i],
+                               r.busy_us / 1000.0, r.elapsed_us / 1000.0, per_node, vs);
+                }
+        printf("# vs floor: (c) LSS frames / 10 per node (target <= 1.5x); (a),(b) elapsed per node / fastscan floor "
+               "(target for (a) <= 2x)\n");
+        if (bad)
+                printf("FAILED: mis-assignments or failures (see stderr)\n");
+        return bad;
+}

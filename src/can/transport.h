@@ -1,0 +1,121 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The transport seam: how the daemon drives one CAN bus, whatever is behind it
+ * (a SocketCAN port in production, the in-memory bus in tests).
+ *
+ * Contract every implementation keeps:
+ *  - send() puts one frame on the bus, or returns an error having sent nothing:
+ *    never drops, reorders or duplicates. Errors: -ENETDOWN (link down: fail
+ *    the transaction, the transport works again once the link is up),
+ *    -ENODEV (interface gone: the transport re-opens it by name later),
+ *    -ETIMEDOUT (tx queue stayed full), -EINVAL (frame not sendable).
+ *  - recv() returns 1 with one frame and its receive time, 0 when nothing is
+ *    pending, <0 on error (same codes as send). Frames arrive in bus order.
+ *    Error frames never come out of recv(): they update the status.
+ *  - rx times and now() are the same clock (CLOCK_MONOTONIC µs, or the
+ *    virtual clock of a simulated bus). An rx time is never later than the
+ *    moment the frame was really received, so the engine's drain rule
+ *    ("ignore frames received before my request was sent") never takes a
+ *    stale frame for an answer.
+ *  - get_fd() is a pollable fd (POLLIN: call recv() until it returns 0), or
+ *    -1 when there is none (simulated bus, or a port whose interface is gone).
+ *    The fd changes when a port is re-opened: callers re-query it after any
+ *    -ENODEV and after the link comes back.
+ *  - status() fills a snapshot and clears its `events`. A step of the engine
+ *    that saw rx_dropped change lost frames: its result is invalid.
+ *    status may be NULL in an implementation that never loses frames.
+ *  - close() frees the implementation.
+ */
+#pragma once
+
+#include <stdint.h>
+#include <string.h>
+
+#include "lss/lss_proto.h"
+
+typedef enum lss_link_state {
+        LSS_LINK_UP = 0,   /* interface up and running: frames go out */
+        LSS_LINK_DOWN,     /* interface exists but is down (or has no carrier) */
+        LSS_LINK_GONE,     /* no such interface (yet, or any more) */
+        _LSS_LINK_STATE_MAX,
+} lss_link_state;
+
+/* Controller fault confinement state, from error frames. */
+typedef enum lss_bus_state {
+        LSS_BUS_ERROR_ACTIVE = 0,
+        LSS_BUS_ERROR_WARNING,  /* an error counter passed 96: still works */
+        LSS_BUS_ERROR_PASSIVE,  /* an error counter passed 127 */
+        LSS_BUS_OFF,            /* tx error counter passed 255: controller silent */
+        _LSS_BUS_STATE_MAX,
+} lss_bus_state;
+
+/* Things error frames reported since the previous status() call. */
+#define LSS_BUS_EVENT_NO_ACK        (1u << 0) /* our frame got no ACK: nobody else on the bus (or wrong rate) */
+#define LSS_BUS_EVENT_RESTARTED     (1u << 1) /* controller restarted after bus-off */
+#define LSS_BUS_EVENT_TX_TIMEOUT    (1u << 2) /* driver could not send within its timeout */
+#define LSS_BUS_EVENT_PROTOCOL      (1u << 3) /* bit/stuff/form errors: wiring or bit-rate mismatch */
+#define LSS_BUS_EVENT_RX_OVERFLOW   (1u << 4) /* controller lost received frames (also counted in rx_dropped) */
+#define LSS_BUS_EVENT_TX_OVERFLOW   (1u << 5) /* controller lost frames we sent */
+#define LSS_BUS_EVENT_STATE_CHANGED (1u << 6) /* `bus` changed */
+#define LSS_BUS_EVENT_LINK_CHANGED  (1u << 7) /* `link` changed */
+
+typedef struct lss_transport_status {
+        lss_link_state link;
+        lss_bus_state bus;
+        uint32_t events;        /* LSS_BUS_EVENT_*, cleared by each status() */
+        uint64_t rx_dropped;    /* frames lost before we read them (socket queue or controller), cumulative */
+        uint64_t rx_invalid;    /* reads ignored: bad length, DLC > 8, frames the filter should have kept out */
+        uint64_t error_frames;  /* error frames received, cumulative */
+        uint8_t tx_errors;      /* controller error counters, when the driver reports them */
+        uint8_t rx_errors;
+} lss_transport_status;
+
+typedef struct lss_transport_ops {
+        int (*send)(void *impl, const lss_frame *f);
+        int (*recv)(void *impl, lss_frame *f, uint64_t *rx_us);
+        int (*get_fd)(void *impl);
+        uint64_t (*now)(void *impl);
+        int (*status)(void *impl, lss_transport_status *st); /* optional */
+        void (*close)(void *impl);
+} lss_transport_ops;
+
+typedef struct lss_transport {
+        const lss_transport_ops *ops;
+        void *impl;
+} lss_transport;
+
+static inline int lss_transport_send(lss_transport *t, const lss_frame *f) {
+        return t->ops->send(t->impl, f);
+}
+
+static inline int lss_transport_recv(lss_transport *t, lss_frame *f, uint64_t *rx_us) {
+        return t->ops->recv(t->impl, f, rx_us);
+}
+
+static inline int lss_transport_get_fd(lss_transport *t) {
+        return t->ops->get_fd ? t->ops->get_fd(t->impl) : -1;
+}
+
+static inline uint64_t lss_transport_now(lss_transport *t) {
+        return t->ops->now(t->impl);
+}
+
+/* Implementations without status() are always up, error-active and lossless. */
+static inline int lss_transport_status_get(lss_transport *t, lss_transport_status *st) {
+        if (t->ops->status)
+                return t->ops->status(t->impl, st);
+        memset(st, 0, sizeof(*st));
+        return 0;
+}
+
+/* Frees the implementation; safe on a closed (zeroed) transport. */
+static inline void lss_transport_close(lss_transport *t) {
+        if (t->ops && t->ops->close)
+                t->ops->close(t->impl);
+        t->ops = NULL;
+        t->impl = NULL;
+}
+
+/* "up", "down", "gone"; NULL if out of range. */
+const char *lss_link_state_to_string(lss_link_state s);
+/* "error-active", "error-warning", "error-passive", "bus-off"; NULL if out of range. */
+const char *lss_bus_state_to_string(lss_bus_state s);

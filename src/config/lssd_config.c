@@ -1,0 +1,165 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The configuration object: construction, freeing, look-ups, formatting. */
+#include <errno.h>
+#include <inttypes.h>
+#include <net/if.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "config/lssd_config.h"
+
+_Static_assert(LSSD_IFNAME_MAX + 1 == IFNAMSIZ, "interface name size must match the kernel's");
+
+int lssd_config_new(lssd_config **ret) {
+        lssd_config *c = calloc(1, sizeof(*c));
+        if (!c)
+                return -ENOMEM;
+        c->lss_timeout_ms = LSSD_LSS_TIMEOUT_MS_DEFAULT;
+        c->lss_timing = LSSD_LSS_TIMING_ADAPTIVE;
+        *ret = c;
+        return 0;
+}
+
+int lssd_config_add_default_bus(lssd_config *c, const char *ifname, lssd_bus_config **ret) {
+        if (!lssd_ifname_valid(ifname))
+                return -EINVAL;
+        if (lssd_config_find_bus(c, ifname))
+                return -EEXIST;
+
+        lssd_bus_config *buses = realloc(c->buses, (c->n_buses + 1) * sizeof(*buses));
+        if (!buses)
+                return -ENOMEM;
+        c->buses = buses;
+
+        lssd_bus_config *b = &c->buses[c->n_buses++];
+        *b = (lssd_bus_config) {
+                .bitrate = LSSD_BITRATE_DEFAULT,
+                .lss_timeout_ms = c->lss_timeout_ms,
+                .lss_timing = c->lss_timing,
+                .store = true,
+                .unknown = LSSD_UNKNOWN_IGNORE,
+        };
+        strcpy(b->interface, ifname); /* length checked by lssd_ifname_valid() */
+        if (ret)
+                *ret = b;
+        return 0;
+}
+
+lssd_config *lssd_config_free(lssd_config *c) {
+        if (!c)
+                return NULL;
+        for (size_t i = 0; i < c->n_buses; i++)
+                free(c->buses[i].devices);
+        free(c->buses);
+        free(c->source);
+        free(c);
+        return NULL;
+}
+
+const lssd_bus_config *lssd_config_find_bus(const lssd_config *c, const char *ifname) {
+        if (!c || !ifname)
+                return NULL;
+        for (size_t i = 0; i < c->n_buses; i++)
+                if (strcmp(c->buses[i].interface, ifname) == 0)
+                        return &c->buses[i];
+        return NULL;
+}
+
+bool lssd_device_config_matches(const lssd_device_config *d, const lss_identity *id) {
+        return d->identity.vendor == id->vendor &&
+               d->identity.product == id->product &&
+               d->identity.serial == id->serial &&
+               (!d->has_revision || d->identity.revision == id->revision);
+}
+
+const lssd_device_config *lssd_config_lookup_device(const lssd_bus_config *b, const lss_identity *id) {
+        if (!b || !id)
+                return NULL;
+        for (size_t i = 0; i < b->n_devices; i++)
+                if (lssd_device_config_matches(&b->devices[i], id))
+                        return &b->devices[i];
+        return NULL;
+}
+
+const lssd_device_config *lssd_bus_config_find_node_id(const lssd_bus_config *b, uint8_t node_id) {
+        if (!b)
+                return NULL;
+        for (size_t i = 0; i < b->n_devices; i++)
+                if (b->devices[i].node_id == node_id)
+                        return &b->devices[i];
+        return NULL;
+}
+
+const char *lssd_bus_config_describe(const lssd_bus_config *b, char *buf, size_t size) {
+        char unknown[32];
+
+        if (!buf || size == 0)
+                return buf;
+        if (b->unknown == LSSD_UNKNOWN_POOL)
+                snprintf(unknown, sizeof(unknown), "pool %u..%u", b->pool_lo, b->pool_hi);
+        else
+                snprintf(unknown, sizeof(unknown), "ignore");
+
+        snprintf(buf, size,
+                 "%s: %" PRIu32 " bit/s, %zu mapped device%s, auto-assign %s, store %s, "
+                 "unknown devices: %s, nmt-stop %s, bit-rate change %s, LSS timeout %" PRIu32 " ms (%s)",
+                 b->interface, b->bitrate, b->n_devices, b->n_devices == 1 ? "" : "s",
+                 b->auto_assign ? "on" : "off", b->store ? "on" : "off", unknown,
+                 b->nmt_stop ? "on" : "off", b->bitrate_change ? "allowed" : "off",
+                 b->lss_timeout_ms, lssd_lss_timing_to_string(b->lss_timing));
+        return buf;
+}
+
+bool lssd_ifname_valid(const char *name) {
+        if (!name)
+                return false;
+        size_t n = strlen(name);
+        if (n == 0 || n > LSSD_IFNAME_MAX)
+                return false;
+        if (strcmp(name, ".") == 0 || strcmp(name, "..") == 0)
+                return false;
+        for (const unsigned char *p = (const unsigned char *) name; *p; p++)
+                /* The kernel refuses '/', ':' and whitespace; control characters
+                 * would only garble logs. */
+                if (*p <= ' ' || *p == 0x7F || *p == '/' || *p == ':')
+                        return false;
+        return true;
+}
+
+static const char *const unknown_policy_names[] = {
+        [LSSD_UNKNOWN_IGNORE] = "ignore",
+        [LSSD_UNKNOWN_POOL] = "pool",
+};
+
+static const char *const lss_timing_names[] = {
+        [LSSD_LSS_TIMING_ADAPTIVE] = "adaptive",
+        [LSSD_LSS_TIMING_FIXED] = "fixed",
+};
+
+static int name_lookup(const char *const *names, size_t n, const char *s) {
+        if (!s)
+                return -EINVAL;
+        for (size_t i = 0; i < n; i++)
+                if (strcmp(names[i], s) == 0)
+                        return (int) i;
+        return -EINVAL;
+}
+
+const char *lssd_unknown_policy_to_string(lssd_unknown_policy p) {
+        return (unsigned) p < sizeof(unknown_policy_names) / sizeof(unknown_policy_names[0]) ?
+                unknown_policy_names[p] : NULL;
+}
+
+int lssd_unknown_policy_from_string(const char *s) {
+        return name_lookup(unknown_policy_names, sizeof(unknown_policy_names) / sizeof(unknown_policy_names[0]), s);
+}
+
+const char *lssd_lss_timing_to_string(lssd_lss_timing t) {
+        return (unsigned) t < sizeof(lss_timing_names) / sizeof(lss_timing_names[0]) ?
+                lss_timing_names[t] : NULL;
+}
+
+int lssd_lss_timing_from_string(const char *s) {
+        return name_lookup(lss_timing_names, sizeof(lss_timing_names) / sizeof(lss_timing_names[0]), s);
+}

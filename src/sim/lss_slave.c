@@ -1,0 +1,439 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The CiA 305 LSS slave model (plus the NMT commands it needs). Sans-I/O:
+ * frames and time come in, answers go out through the emit callback. */
+#include "sim/lss_slave.h"
+
+#include <string.h>
+
+#define NO_DEADLINE UINT64_MAX
+#define FASTSCAN_MAX_BIT 31u
+#define BIT_TIMING_TABLE_MAX 8u /* table 0 index 9 (auto) is not supported */
+
+void lss_slave_faults_default(lss_slave_faults *f) {
+        memset(f, 0, sizeof(*f));
+        f->ignore_cs = -1;
+        f->early_config = SLAVE_EARLY_NONE;
+}
+
+/* splitmix64: small, good enough, and deterministic for a given seed */
+static uint64_t next_random(uint64_t *state) {
+        uint64_t z = (*state += UINT64_C(0x9E3779B97F4A7C15));
+        z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)) * UINT64_C(0x94D049BB133111EB);
+        return z ^ (z >> 31);
+}
+
+void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8_t bit_index,
+                    const lss_slave_faults *faults, uint64_t seed, lss_slave_emit_fn emit, void *userdata) {
+        memset(s, 0, sizeof(*s));
+        s->id = *id;
+        if (faults)
+                s->faults = *faults;
+        else
+                lss_slave_faults_default(&s->faults);
+        s->st.active_node_id = s->st.pending_node_id = s->st.stored_node_id = node_id;
+        s->st.bit_index = s->st.pending_bit_index = s->st.stored_bit_index = bit_index;
+        s->st.configuration = false;
+        s->st.nmt = SLAVE_NMT_PRE_OPERATIONAL;
+        s->fs_sub = -1;
+        s->switch_at_us = NO_DEADLINE;
+        s->rng = seed;
+        s->emit = emit;
+        s->userdata = userdata;
+}
+
+static bool state_equal(const lss_slave_state *a, const lss_slave_state *b) {
+        return a->active_node_id == b->active_node_id &&
+                a->pending_node_id == b->pending_node_id &&
+                a->stored_node_id == b->stored_node_id &&
+                a->bit_index == b->bit_index &&
+                a->pending_bit_index == b->pending_bit_index &&
+                a->stored_bit_index == b->stored_bit_index &&
+                a->configuration == b->configuration &&
+                a->nmt == b->nmt;
+}
+
+/* Delay of the next frame: latency + jitter, never ahead of a frame the
+ * slave already queued (one transmit queue, sent in order). */
+static uint64_t tx_delay(lss_slave *s) {
+        uint64_t d = s->faults.latency_us;
+        if (s->faults.jitter_us > 0)
+                d += next_random(&s->rng) % ((uint64_t) s->faults.jitter_us + 1);
+        uint64_t at = s->now_us + d;
+        if (at < s->tx_ready_us)
+                at = s->tx_ready_us;
+        s->tx_ready_us = at;
+        return at - s->now_us;
+}
+
+static void send_frame(lss_slave *s, const lss_frame *f) {
+        if (s->emit)
+                s->emit(s->userdata, f, tx_delay(s));
+}
+
+/* An LSS answer, subject to the answer faults (boot-ups are not). */
+static void answer(lss_slave *s, const lss_frame *f) {
+        if (s->faults.silent || !s->emit)
+                return;
+        lss_frame a = *f;
+        if (s->faults.wrong_dlc)
+                a.len = 7;
+        uint64_t d = tx_delay(s);
+        s->emit(s->userdata, &a, d);
+        if (s->faults.duplicate_answers)
+                s->emit(s->userdata, &a, d);
+}
+
+static void answer_cs(lss_slave *s, uint8_t cs, uint8_t b1, uint8_t b2) {
+        lss_frame f;
+        lss_frame_response(&f, cs);
+        f.data[1] = b1;
+        f.data[2] = b2;
+        answer(s, &f);
+}
+
+static void answer_u32(lss_slave *s, uint8_t cs, uint32_t v) {
+        lss_frame f;
+        lss_frame_response(&f, cs);
+        lss_put_u32(f.data + 1, v);
+        answer(s, &f);
+}
+
+static bool in_window(const lss_slave *s, uint64_t now_us) {
+        return now_us >= s->activate_at_us && now_us < s->silent_until_us;
+}
+
+/* The switch of Activate Bit Timing, once its first delay has passed. */
+static void process_time(lss_slave *s) {
+        if (s->switch_at_us != NO_DEADLINE && s->now_us >= s->switch_at_us) {
+                s->st.bit_index = s->st.pending_bit_index;
+                s->switch_at_us = NO_DEADLINE;
+        }
+}
+
+static void reset_protocol_progress(lss_slave *s) {
+        s->fs_sub = -1;
+        s->ident_step = 0;
+        s->ident_match = false;
+        s->sel_step = 0;
+}
+
+/* NMT Reset Communication: the pending node-ID becomes active, LSS is back
+ * in waiting, the node announces itself when it has an ID. */
+static void reset_communication(lss_slave *s) {
+        s->st.active_node_id = s->st.pending_node_id;
+        s->st.configuration = false;
+        s->st.nmt = SLAVE_NMT_PRE_OPERATIONAL;
+        reset_protocol_progress(s);
+        if (lss_node_id_valid(s->st.active_node_id)) {
+                lss_frame f;
+                bootup_encode(&f, s->st.active_node_id);
+                send_frame(s, &f);
+        }
+}
+
+/* Power-on and NMT Reset Node: everything comes back from storage. */
+static void reset_node(lss_slave *s) {
+        s->st.pending_node_id = s->st.stored_node_id;
+        s->st.bit_index = s->st.pending_bit_index = s->st.stored_bit_index;
+        s->switch_at_us = NO_DEADLINE;
+        s->activate_at_us = s->silent_until_us = 0;
+        reset_communication(s);
+}
+
+static void enter_configuration(lss_slave *s) {
+        s->st.configuration = true;
+        s->fs_sub = -1;
+        s->sel_step = 0;
+}
+
+static void switch_global(lss_slave *s, uint8_t mode) {
+        if (mode == LSS_MODE_CONFIGURATION) {
+                enter_configuration(s);
+                return;
+        }
+        if (mode != LSS_MODE_WAITING)
+                return;
+        bool was_configuring = s->st.configuration;
+        s->st.configuration = false;
+        s->sel_step = 0;
+        /* a node that had no ID and just got one starts using it at once */
+        if (was_configuring && s->st.active_node_id == LSS_NODE_ID_UNCONFIGURED &&
+            lss_node_id_valid(s->st.pending_node_id))
+                reset_communication(s);
+}
+
+static void switch_selective(lss_slave *s, unsigned field, uint32_t value) {
+        bool hit = value == lss_identity_field(&s->id, field);
+        if (field == LSS_FIELD_VENDOR) {
+                s->sel_step = hit ? 1 : 0;
+                return;
+        }
+        if (!hit || s->sel_step != field) {
+                s->sel_step = 0;
+                return;
+        }
+        if (field < LSS_FIELD_SERIAL) {
+                s->sel_step = field + 1;
+                return;
+        }
+        enter_configuration(s);
+        answer_cs(s, LSS_CS_SWITCH_SEL_RESPONSE, 0, 0);
+}
+
+static void identify_remote(lss_slave *s, unsigned step, uint32_t value) {
+        if (step == 0) {
+                s->ident_step = 1;
+                s->ident_match = value == s->id.vendor;
+                return;
+        }
+        if (s->ident_step != step) {
+                s->ident_step = 0;
+                s->ident_match = false;
+                return;
+        }
+        bool ok;
+        switch (step) {
+        case 1: ok = s->id.product == value; break;
+        case 2: ok = s->id.revision >= value; break;
+        case 3: ok = s->id.revision <= value; break;
+        case 4: ok = s->id.serial >= value; break;
+        default: ok = s->id.serial <= value; break;
+        }
+        s->ident_match = s->ident_match && ok;
+        if (step < 5) {
+                s->ident_step = step + 1;
+                return;
+        }
+        if (s->ident_match)
+                answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
+        s->ident_step = 0;
+        s->ident_match = false;
+}
+
+static bool early_config_after(const lss_slave *s, unsigned sub) {
+        return s->faults.early_config != SLAVE_EARLY_NONE && sub == (unsigned) s->faults.early_config - 1;
+}
+
+static void fastscan(lss_slave *s, const lss_frame *f) {
+        uint32_t idnumber = lss_get_u32(f->data + 1);
+        uint8_t bitcheck = f->data[5], sub = f->data[6], next = f->data[7];
+
+        if (s->st.configuration)
+                return;
+        if (s->st.active_node_id != LSS_NODE_ID_UNCONFIGURED && !s->faults.fastscan_when_configured)
+                return;
+        if ((bitcheck > FASTSCAN_MAX_BIT && bitcheck != LSS_FASTSCAN_PING) ||
+            sub >= LSS_FIELD_COUNT || next >= LSS_FIELD_COUNT)
+                return;
+        if (bitcheck == LSS_FASTSCAN_PING) {
+                s->fs_sub = LSS_FIELD_VENDOR;
+                answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
+                return;
+        }
+        if (s->fs_sub != (int) sub)
+                return;
+        uint32_t mask = UINT32_MAX << bitcheck;
+        if ((lss_identity_field(&s->id, sub) ^ idnumber) & mask)
+                return;
+        answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
+        if (bitcheck != 0)
+                return;
+        s->fs_sub = next;
+        /* lssnext going back (to vendor) after the last field: found */
+        if (next < sub || early_config_after(s, sub))
+                enter_configuration(s);
+}
+
+static void configure_node_id(lss_slave *s, uint8_t nid) {
+        if (s->faults.configure_error_specific) {
+                answer_cs(s, LSS_CS_CONFIGURE_NODE_ID, LSS_ERR_SPECIFIC, 0x42);
+                return;
+        }
+        if (!lss_node_id_valid(nid) && nid != LSS_NODE_ID_UNCONFIGURED) {
+                answer_cs(s, LSS_CS_CONFIGURE_NODE_ID, LSS_ERR_NODE_ID_OUT_OF_RANGE, 0);
+                return;
+        }
+        s->st.pending_node_id = nid;
+        answer_cs(s, LSS_CS_CONFIGURE_NODE_ID, LSS_ERR_OK, 0);
+}
+
+static void configure_bit_timing(lss_slave *s, uint8_t table, uint8_t index) {
+        if (s->faults.bit_timing_silent)
+                return;
+        if (table != 0 || index > BIT_TIMING_TABLE_MAX || (s->faults.bit_index_unsupported & (UINT32_C(1) << index))) {
+                answer_cs(s, LSS_CS_CONFIGURE_BIT_TIMING, LSS_ERR_BIT_RATE_NOT_SUPPORTED, 0);
+                return;
+        }
+        s->st.pending_bit_index = index;
+        answer_cs(s, LSS_CS_CONFIGURE_BIT_TIMING, LSS_ERR_OK, 0);
+}
+
+static void activate_bit_timing(lss_slave *s, uint16_t delay_ms) {
+        if (s->faults.miss_activation)
+                return;
+        uint64_t d = (uint64_t) delay_ms * 1000;
+        s->activate_at_us = s->now_us;
+        s->switch_at_us = s->now_us + d;
+        s->silent_until_us = s->now_us + 2 * d;
+        process_time(s); /* a zero delay switches at once */
+}
+
+static void store(lss_slave *s) {
+        if (s->faults.store_unsupported) {
+                answer_cs(s, LSS_CS_STORE, LSS_ERR_STORE_NOT_SUPPORTED, 0);
+                return;
+        }
+        if (s->faults.store_fails) {
+                answer_cs(s, LSS_CS_STORE, LSS_ERR_STORE_MEDIA, 0);
+                return;
+        }
+        s->st.stored_node_id = s->st.pending_node_id;
+        s->st.stored_bit_index = s->st.pending_bit_index;
+        answer_cs(s, LSS_CS_STORE, LSS_ERR_OK, 0);
+}
+
+/* Services only the slave(s) in configuration state carry out. */
+static void configuration_service(lss_slave *s, const lss_frame *f) {
+        uint8_t cs = f->data[0];
+        switch (cs) {
+        case LSS_CS_CONFIGURE_NODE_ID:
+                configure_node_id(s, f->data[1]);
+                break;
+        case LSS_CS_CONFIGURE_BIT_TIMING:
+                configure_bit_timing(s, f->data[1], f->data[2]);
+                break;
+        case LSS_CS_ACTIVATE_BIT_TIMING:
+                activate_bit_timing(s, lss_get_u16(f->data + 1));
+                break;
+        case LSS_CS_STORE:
+                store(s);
+                break;
+        case LSS_CS_INQUIRE_VENDOR:
+        case LSS_CS_INQUIRE_PRODUCT:
+        case LSS_CS_INQUIRE_REVISION:
+        case LSS_CS_INQUIRE_SERIAL:
+                answer_u32(s, cs, lss_identity_field(&s->id, cs - LSS_CS_INQUIRE_VENDOR));
+                break;
+        case LSS_CS_INQUIRE_NODE_ID:
+                answer_cs(s, cs, s->st.active_node_id, 0);
+                break;
+        default:
+                break;
+        }
+}
+
+static void lss_request(lss_slave *s, const lss_frame *f) {
+        uint8_t cs = f->data[0];
+
+        if (s->faults.ignore_cs >= 0 && cs == s->faults.ignore_cs)
+                return;
+        if (s->faults.needs_nmt_stopped && s->st.nmt != SLAVE_NMT_STOPPED)
+                return;
+
+        switch (cs) {
+        case LSS_CS_SWITCH_GLOBAL:
+                switch_global(s, f->data[1]);
+                break;
+        case LSS_CS_SWITCH_SEL_VENDOR:
+        case LSS_CS_SWITCH_SEL_PRODUCT:
+        case LSS_CS_SWITCH_SEL_REVISION:
+        case LSS_CS_SWITCH_SEL_SERIAL:
+                /* selection is a waiting-state service */
+                if (!s->st.configuration)
+                        switch_selective(s, cs - LSS_CS_SWITCH_SEL_VENDOR, lss_get_u32(f->data + 1));
+                break;
+        case LSS_CS_IDENTIFY_VENDOR:
+        case LSS_CS_IDENTIFY_PRODUCT:
+        case LSS_CS_IDENTIFY_REV_LOW:
+        case LSS_CS_IDENTIFY_REV_HIGH:
+        case LSS_CS_IDENTIFY_SERIAL_LOW:
+        case LSS_CS_IDENTIFY_SERIAL_HIGH:
+                if (!s->faults.no_identify)
+                        identify_remote(s, cs - LSS_CS_IDENTIFY_VENDOR, lss_get_u32(f->data + 1));
+                break;
+        case LSS_CS_IDENTIFY_NON_CONFIGURED:
+                if (!s->faults.no_identify && s->st.active_node_id == LSS_NODE_ID_UNCONFIGURED)
+                        answer_cs(s, LSS_CS_IDENTIFY_NON_CONFIGURED_SLAVE, 0, 0);
+                break;
+        case LSS_CS_FASTSCAN:
+                fastscan(s, f);
+                break;
+        default:
+                if (s->st.configuration)
+                        configuration_service(s, f);
+                break;
+        }
+}
+
+static void nmt_command(lss_slave *s, uint8_t cs, uint8_t node) {
+        if (node != 0 && (node != s->st.active_node_id || !lss_node_id_valid(node)))
+                return;
+        switch (cs) {
+        case NMT_CS_START:
+                s->st.nmt = SLAVE_NMT_OPERATIONAL;
+                break;
+        case NMT_CS_STOP:
+                s->st.nmt = SLAVE_NMT_STOPPED;
+                break;
+        case NMT_CS_PRE_OPERATIONAL:
+                s->st.nmt = SLAVE_NMT_PRE_OPERATIONAL;
+                break;
+        case NMT_CS_RESET_NODE:
+                reset_node(s);
+                break;
+        case NMT_CS_RESET_COMMUNICATION:
+                reset_communication(s);
+                break;
+        default:
+                break;
+        }
+}
+
+static void note_change(lss_slave *s, const lss_slave_state *before) {
+        if (!state_equal(before, &s->st))
+                s->changes++;
+}
+
+void lss_slave_power_on(lss_slave *s, uint64_t now_us) {
+        lss_slave_state before = s->st;
+        s->now_us = now_us;
+        reset_node(s);
+        note_change(s, &before);
+}
+
+void lss_slave_on_frame(lss_slave *s, const lss_frame *f, uint64_t now_us) {
+        lss_slave_state before = s->st;
+        uint8_t cs, node;
+
+        s->now_us = now_us;
+        process_time(s);
+        /* inside the activation window the controller is being retuned */
+        if (!in_window(s, now_us)) {
+                if (lss_is_request(f))
+                        lss_request(s, f);
+                else if (nmt_decode(f, &cs, &node))
+                        nmt_command(s, cs, node);
+        }
+        note_change(s, &before);
+}
+
+void lss_slave_on_time(lss_slave *s, uint64_t now_us) {
+        lss_slave_state before = s->st;
+        s->now_us = now_us;
+        process_time(s);
+        note_change(s, &before);
+}
+
+uint64_t lss_slave_deadline(const lss_slave *s) {
+        return s->switch_at_us;
+}
+
+bool lss_slave_on_bus(const lss_slave *s, uint8_t bus_bit_index, uint64_t now_us) {
+        if (in_window(s, now_us))
+                return false;
+        /* the switch may be due without on_time() having been called yet */
+        uint8_t idx = s->switch_at_us != NO_DEADLINE && now_us >= s->switch_at_us ?
+                s->st.pending_bit_index : s->st.bit_index;
+        return idx == bus_bit_index;
+}

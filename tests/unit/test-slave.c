@@ -1,0 +1,1128 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The slave model driven directly: frames in, captured frames out. */
+#include <check.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lss/lss_proto.h"
+#include "sim/lss_slave.h"
+
+#define CAP_MAX 1024
+
+typedef struct rig {
+        lss_slave s;
+        lss_frame out[CAP_MAX];
+        uint64_t delay[CAP_MAX];
+        unsigned n;
+        uint64_t now;
+} rig;
+
+static const lss_identity ID = { 0x00000319, 0x00A10002, 0x00020005, 0x12345678 };
+
+static void capture(void *ud, const lss_frame *f, uint64_t delay_us) {
+        rig *r = ud;
+        ck_assert_uint_lt(r->n, CAP_MAX);
+        r->out[r->n] = *f;
+        r->delay[r->n++] = delay_us;
+}
+
+static void rig_init(rig *r, uint8_t node_id, const lss_slave_faults *faults) {
+        memset(r, 0, sizeof(*r));
+        r->now = 1000;
+        lss_slave_init(&r->s, &ID, node_id, 4, faults, 42, capture, r);
+}
+
+static void feed(rig *r, const lss_frame *f) {
+        lss_slave_on_frame(&r->s, f, r->now);
+}
+
+/* Sends a request and returns how many frames came out. */
+static unsigned ask(rig *r, const lss_frame *f) {
+        unsigned before = r->n;
+        feed(r, f);
+        return r->n - before;
+}
+
+static const lss_frame *last(const rig *r) {
+        ck_assert_uint_gt(r->n, 0);
+        return &r->out[r->n - 1];
+}
+
+static void expect_answer(const rig *r, uint8_t cs, uint8_t b1, uint8_t b2) {
+        const lss_frame *f = last(r);
+        ck_assert(lss_is_response(f));
+        ck_assert_uint_eq(f->data[0], cs);
+        ck_assert_uint_eq(f->data[1], b1);
+        ck_assert_uint_eq(f->data[2], b2);
+        for (unsigned i = 3; i < 8; i++)
+                ck_assert_uint_eq(f->data[i], 0);
+}
+
+static void expect_bootup(const rig *r, uint8_t nid) {
+        uint8_t got = 0, st = 0xAA;
+        ck_assert(bootup_decode(last(r), &got, &st));
+        ck_assert_uint_eq(got, nid);
+        ck_assert_uint_eq(st, 0);
+}
+
+/* Switch state global; only a boot-up can come out of it. */
+static void global(rig *r, enum lss_mode mode) {
+        lss_frame f;
+        lss_encode_switch_global(&f, mode);
+        unsigned n = ask(r, &f);
+        ck_assert_uint_le(n, 1);
+        if (n == 1)
+                ck_assert(bootup_decode(last(r), NULL, NULL));
+        ck_assert(r->s.st.configuration == (mode == LSS_MODE_CONFIGURATION));
+}
+
+static unsigned configure_node_id(rig *r, uint8_t nid) {
+        lss_frame f;
+        lss_encode_configure_node_id(&f, nid);
+        return ask(r, &f);
+}
+
+static unsigned nmt(rig *r, enum nmt_cs cs, uint8_t node) {
+        lss_frame f;
+        nmt_encode(&f, cs, node);
+        return ask(r, &f);
+}
+
+static unsigned inquire(rig *r, unsigned field) {
+        lss_frame f;
+        lss_encode_inquire(&f, field);
+        return ask(r, &f);
+}
+
+static unsigned store(rig *r) {
+        lss_frame f;
+        lss_encode_store(&f);
+        return ask(r, &f);
+}
+
+static unsigned bit_timing(rig *r, uint8_t table, uint8_t index) {
+        lss_frame f;
+        lss_encode_configure_bit_timing(&f, table, index);
+        return ask(r, &f);
+}
+
+static unsigned activate(rig *r, uint16_t ms) {
+        lss_frame f;
+        lss_encode_activate_bit_timing(&f, ms);
+        return ask(r, &f);
+}
+
+static unsigned fastscan(rig *r, uint32_t idn, uint8_t bitcheck, uint8_t sub, uint8_t next) {
+        lss_frame f;
+        lss_encode_fastscan(&f, idn, bitcheck, sub, next);
+        return ask(r, &f);
+}
+
+static unsigned selective(rig *r, enum lss_field field, uint32_t v) {
+        lss_frame f;
+        lss_encode_switch_selective(&f, field, v);
+        return ask(r, &f);
+}
+
+static unsigned select_all(rig *r, const lss_identity *id) {
+        unsigned n = 0;
+        for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
+                n += selective(r, i, lss_identity_field(id, i));
+        return n;
+}
+
+static unsigned identify(rig *r, uint32_t vendor, uint32_t product, uint32_t rev_lo, uint32_t rev_hi,
+                         uint32_t ser_lo, uint32_t ser_hi) {
+        uint32_t v[6] = { vendor, product, rev_lo, rev_hi, ser_lo, ser_hi };
+        unsigned n = 0;
+        for (unsigned i = 0; i < 6; i++) {
+                lss_frame f;
+                lss_encode_identify_remote(&f, i, v[i]);
+                unsigned got = ask(r, &f);
+                if (i < 5)
+                        ck_assert_uint_eq(got, 0);
+                n += got;
+        }
+        return n;
+}
+
+START_TEST(init_and_defaults) {
+        lss_slave_faults f;
+        memset(&f, 0x5A, sizeof(f));
+        lss_slave_faults_default(&f);
+        ck_assert_int_eq(f.ignore_cs, -1);
+        ck_assert(!f.silent && !f.wrong_dlc && !f.duplicate_answers);
+        ck_assert_uint_eq(f.latency_us, 0);
+        ck_assert_int_eq(f.early_config, SLAVE_EARLY_NONE);
+
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x22);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0x22);
+        ck_assert_uint_eq(r.s.st.stored_node_id, 0x22);
+        ck_assert_uint_eq(r.s.st.bit_index, 4);
+        ck_assert_uint_eq(r.s.st.stored_bit_index, 4);
+        ck_assert(!r.s.st.configuration);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+        ck_assert_int_eq(r.s.fs_sub, -1);
+        ck_assert_int_eq(r.s.faults.ignore_cs, -1);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), UINT64_MAX);
+        ck_assert_uint_eq(r.s.changes, 0);
+        ck_assert_uint_eq(r.n, 0);
+        ck_assert(lss_slave_on_bus(&r.s, 4, 0));
+        ck_assert(!lss_slave_on_bus(&r.s, 3, 0));
+}
+END_TEST
+
+START_TEST(switch_global_modes) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        global(&r, LSS_MODE_CONFIGURATION);
+        lss_frame f;
+        lss_frame_request(&f, LSS_CS_SWITCH_GLOBAL);
+        f.data[1] = 2; /* reserved mode: ignored */
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        ck_assert(r.s.st.configuration);
+        global(&r, LSS_MODE_WAITING);
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(r.n, 0);
+}
+END_TEST
+
+START_TEST(configure_node_id_errors) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        /* not in configuration: nobody answers */
+        ck_assert_uint_eq(configure_node_id(&r, 5), 0);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0x22);
+        global(&r, LSS_MODE_CONFIGURATION);
+
+        ck_assert_uint_eq(configure_node_id(&r, 0), 1);
+        expect_answer(&r, 0x11, LSS_ERR_NODE_ID_OUT_OF_RANGE, 0);
+        ck_assert_uint_eq(configure_node_id(&r, 128), 1);
+        expect_answer(&r, 0x11, LSS_ERR_NODE_ID_OUT_OF_RANGE, 0);
+        ck_assert_uint_eq(configure_node_id(&r, 0xFE), 1);
+        expect_answer(&r, 0x11, LSS_ERR_NODE_ID_OUT_OF_RANGE, 0);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0x22);
+
+        ck_assert_uint_eq(configure_node_id(&r, 127), 1);
+        expect_answer(&r, 0x11, LSS_ERR_OK, 0);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 127);
+        ck_assert_uint_eq(configure_node_id(&r, 1), 1);
+        expect_answer(&r, 0x11, LSS_ERR_OK, 0);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 1);
+        ck_assert_uint_eq(configure_node_id(&r, 0xFF), 1);
+        expect_answer(&r, 0x11, LSS_ERR_OK, 0);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0xFF);
+        /* inquire returns the active ID until a reset */
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_COUNT), 1);
+        expect_answer(&r, 0x5E, 0x22, 0);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x22);
+}
+END_TEST
+
+START_TEST(non_configured_applies_id_on_waiting) {
+        rig r;
+        rig_init(&r, 0xFF, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_COUNT), 1);
+        expect_answer(&r, 0x5E, 0xFF, 0);
+        ck_assert_uint_eq(configure_node_id(&r, 0x44), 1);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0xFF);
+        r.n = 0;
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(r.n, 1);
+        expect_bootup(&r, 0x44);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x44);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+        /* only once: it is configured now */
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(r.n, 1);
+}
+END_TEST
+
+START_TEST(non_configured_without_id_stays_silent) {
+        rig r;
+        rig_init(&r, 0xFF, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0xFF), 1);
+        r.n = 0;
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(r.n, 0);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0xFF);
+        /* an NMT reset of a non-configured node: no ID, no boot-up */
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 0);
+}
+END_TEST
+
+START_TEST(configured_applies_id_on_reset_comm) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x30), 1);
+        r.n = 0;
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(r.n, 0);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x22);
+
+        /* addressed to another node, to an invalid one: not for us */
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0x23), 0);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0x30), 0);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x22);
+
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0x22), 1);
+        expect_bootup(&r, 0x30);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x30);
+
+        /* broadcast (node 0) resets everyone, unconfigure goes through too */
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0xFF), 1);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 0);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0xFF);
+        ck_assert(!r.s.st.configuration);
+}
+END_TEST
+
+START_TEST(reset_comm_leaves_configuration) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 1);
+        expect_bootup(&r, 0x22);
+        ck_assert(!r.s.st.configuration);
+}
+END_TEST
+
+START_TEST(nmt_states) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_START, 0x22), 0);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_OPERATIONAL);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_STOP, 0), 0);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_STOPPED);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_PRE_OPERATIONAL, 0x22), 0);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_START, 0x21), 0);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+        /* unknown command */
+        ck_assert_uint_eq(nmt(&r, (enum nmt_cs) 0x33, 0), 0);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+        /* NMT frame with a bad DLC is not NMT */
+        lss_frame f;
+        nmt_encode(&f, NMT_CS_STOP, 0);
+        f.len = 3;
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+        /* the boot-up puts the node back to pre-operational */
+        ck_assert_uint_eq(nmt(&r, NMT_CS_START, 0), 0);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 1);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+}
+END_TEST
+
+START_TEST(store_and_power_on) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x40), 1);
+        ck_assert_uint_eq(bit_timing(&r, 0, 2), 1);
+        ck_assert_uint_eq(store(&r), 1);
+        expect_answer(&r, 0x17, LSS_ERR_OK, 0);
+        ck_assert_uint_eq(r.s.st.stored_node_id, 0x40);
+        ck_assert_uint_eq(r.s.st.stored_bit_index, 2);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x22);
+        ck_assert_uint_eq(r.s.st.bit_index, 4);
+
+        /* changed again but not stored: lost on power cycle */
+        ck_assert_uint_eq(configure_node_id(&r, 0x41), 1);
+        r.n = 0;
+        lss_slave_power_on(&r.s, 5000);
+        ck_assert_uint_eq(r.n, 1);
+        expect_bootup(&r, 0x40);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x40);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0x40);
+        ck_assert_uint_eq(r.s.st.bit_index, 2);
+        ck_assert_uint_eq(r.s.st.pending_bit_index, 2);
+        ck_assert(!r.s.st.configuration);
+        ck_assert(lss_slave_on_bus(&r.s, 2, 5000));
+        ck_assert(!lss_slave_on_bus(&r.s, 4, 5000));
+}
+END_TEST
+
+START_TEST(power_on_non_configured) {
+        rig r;
+        rig_init(&r, 0xFF, NULL);
+        lss_slave_power_on(&r.s, 0);
+        ck_assert_uint_eq(r.n, 0);
+        ck_assert_uint_eq(r.s.changes, 0);
+        /* stored 0xFF ("none") after a store of 0xFF: comes up non-configured */
+        rig_init(&r, 0x10, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0xFF), 1);
+        ck_assert_uint_eq(store(&r), 1);
+        r.n = 0;
+        lss_slave_power_on(&r.s, 0);
+        ck_assert_uint_eq(r.n, 0);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0xFF);
+}
+END_TEST
+
+START_TEST(reset_node_restores_stored) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x40), 1);
+        ck_assert_uint_eq(store(&r), 1);
+        ck_assert_uint_eq(configure_node_id(&r, 0x41), 1);
+        ck_assert_uint_eq(bit_timing(&r, 0, 3), 1);
+        global(&r, LSS_MODE_WAITING);
+        r.n = 0;
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_NODE, 0x22), 1);
+        expect_bootup(&r, 0x40);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x40);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0x40);
+        ck_assert_uint_eq(r.s.st.pending_bit_index, 4);
+}
+END_TEST
+
+START_TEST(store_errors) {
+        lss_slave_faults f;
+        rig r;
+
+        lss_slave_faults_default(&f);
+        f.store_unsupported = true;
+        rig_init(&r, 0x22, &f);
+        ck_assert_uint_eq(store(&r), 0); /* waiting: not for us */
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x40), 1);
+        ck_assert_uint_eq(store(&r), 1);
+        expect_answer(&r, 0x17, LSS_ERR_STORE_NOT_SUPPORTED, 0);
+        ck_assert_uint_eq(r.s.st.stored_node_id, 0x22);
+
+        lss_slave_faults_default(&f);
+        f.store_fails = true;
+        rig_init(&r, 0x22, &f);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x40), 1);
+        ck_assert_uint_eq(store(&r), 1);
+        expect_answer(&r, 0x17, LSS_ERR_STORE_MEDIA, 0);
+        ck_assert_uint_eq(r.s.st.stored_node_id, 0x22);
+}
+END_TEST
+
+START_TEST(bit_timing_errors) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        ck_assert_uint_eq(bit_timing(&r, 0, 2), 0);
+        global(&r, LSS_MODE_CONFIGURATION);
+        for (uint8_t i = 0; i <= 8; i++) {
+                ck_assert_uint_eq(bit_timing(&r, 0, i), 1);
+                expect_answer(&r, 0x13, LSS_ERR_OK, 0);
+                ck_assert_uint_eq(r.s.st.pending_bit_index, i);
+        }
+        ck_assert_uint_eq(bit_timing(&r, 0, 9), 1); /* automatic detection */
+        expect_answer(&r, 0x13, LSS_ERR_BIT_RATE_NOT_SUPPORTED, 0);
+        ck_assert_uint_eq(bit_timing(&r, 0, 200), 1);
+        expect_answer(&r, 0x13, LSS_ERR_BIT_RATE_NOT_SUPPORTED, 0);
+        ck_assert_uint_eq(bit_timing(&r, 1, 2), 1);
+        expect_answer(&r, 0x13, LSS_ERR_BIT_RATE_NOT_SUPPORTED, 0);
+        ck_assert_uint_eq(bit_timing(&r, 128, 2), 1);
+        expect_answer(&r, 0x13, LSS_ERR_BIT_RATE_NOT_SUPPORTED, 0);
+        ck_assert_uint_eq(r.s.st.pending_bit_index, 8);
+        ck_assert_uint_eq(r.s.st.bit_index, 4);
+
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.bit_index_unsupported = (1u << 5) | (1u << 1);
+        rig_init(&r, 0x22, &f);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(bit_timing(&r, 0, 5), 1);
+        expect_answer(&r, 0x13, LSS_ERR_BIT_RATE_NOT_SUPPORTED, 0);
+        ck_assert_uint_eq(bit_timing(&r, 0, 1), 1);
+        expect_answer(&r, 0x13, LSS_ERR_BIT_RATE_NOT_SUPPORTED, 0);
+        ck_assert_uint_eq(r.s.st.pending_bit_index, 4);
+        ck_assert_uint_eq(bit_timing(&r, 0, 6), 1);
+        expect_answer(&r, 0x13, LSS_ERR_OK, 0);
+
+        lss_slave_faults_default(&f);
+        f.bit_timing_silent = true;
+        rig_init(&r, 0x22, &f);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(bit_timing(&r, 0, 2), 0);
+        ck_assert_uint_eq(r.s.st.pending_bit_index, 4);
+        ck_assert_uint_eq(r.s.changes, 1); /* entering configuration only */
+}
+END_TEST
+
+START_TEST(activation_window) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        /* waiting slaves do not take part */
+        ck_assert_uint_eq(activate(&r, 10), 0);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), UINT64_MAX);
+
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(bit_timing(&r, 0, 2), 1);
+        r.now = 1000;
+        ck_assert(lss_slave_on_bus(&r.s, 4, 999));
+        ck_assert_uint_eq(activate(&r, 10), 0);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), 11000);
+        /* first period: still the old rate, but off the bus */
+        ck_assert(!lss_slave_on_bus(&r.s, 4, 1000));
+        ck_assert(!lss_slave_on_bus(&r.s, 2, 1000));
+        ck_assert(!lss_slave_on_bus(&r.s, 4, 10999));
+        ck_assert_uint_eq(r.s.st.bit_index, 4);
+        /* deaf inside the window */
+        r.now = 5000;
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_COUNT), 0);
+        lss_slave_on_time(&r.s, 11000);
+        ck_assert_uint_eq(r.s.st.bit_index, 2);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), UINT64_MAX);
+        /* second period: switched, still silent */
+        ck_assert(!lss_slave_on_bus(&r.s, 2, 11000));
+        ck_assert(!lss_slave_on_bus(&r.s, 2, 20999));
+        r.now = 20999;
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_COUNT), 0);
+        ck_assert(lss_slave_on_bus(&r.s, 2, 21000));
+        ck_assert(!lss_slave_on_bus(&r.s, 4, 21000));
+        r.now = 21000;
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_COUNT), 1);
+        expect_answer(&r, 0x5E, 0x22, 0);
+        /* still in configuration: the master ends it at the new rate */
+        ck_assert(r.s.st.configuration);
+        /* the new rate is volatile until stored */
+        ck_assert_uint_eq(r.s.st.stored_bit_index, 4);
+}
+END_TEST
+
+START_TEST(activation_switch_without_on_time) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(bit_timing(&r, 0, 7), 1);
+        ck_assert_uint_eq(activate(&r, 2), 0);
+        /* on_bus works out the switch even when on_time() was not called */
+        ck_assert(lss_slave_on_bus(&r.s, 7, 5000));
+        ck_assert(!lss_slave_on_bus(&r.s, 4, 5000));
+        /* and a frame after the window applies it */
+        r.now = 5000;
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_VENDOR), 1);
+        ck_assert_uint_eq(r.s.st.bit_index, 7);
+}
+END_TEST
+
+START_TEST(activation_zero_delay_and_missed) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(bit_timing(&r, 0, 0), 1);
+        ck_assert_uint_eq(activate(&r, 0), 0);
+        ck_assert_uint_eq(r.s.st.bit_index, 0);
+        ck_assert(lss_slave_on_bus(&r.s, 0, r.now));
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), UINT64_MAX);
+
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.miss_activation = true;
+        rig_init(&r, 0x22, &f);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(bit_timing(&r, 0, 0), 1);
+        ck_assert_uint_eq(activate(&r, 10), 0);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), UINT64_MAX);
+        ck_assert(lss_slave_on_bus(&r.s, 4, r.now + 5000));
+        ck_assert(lss_slave_on_bus(&r.s, 4, r.now + 50000));
+        ck_assert_uint_eq(r.s.st.bit_index, 4);
+}
+END_TEST
+
+START_TEST(power_on_cancels_activation) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(bit_timing(&r, 0, 2), 1);
+        ck_assert_uint_eq(activate(&r, 100), 0);
+        lss_slave_power_on(&r.s, 2000);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), UINT64_MAX);
+        ck_assert(lss_slave_on_bus(&r.s, 4, 2000));
+        ck_assert_uint_eq(r.s.st.bit_index, 4);
+}
+END_TEST
+
+START_TEST(inquire_services) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        for (unsigned i = 0; i <= LSS_FIELD_COUNT; i++)
+                ck_assert_uint_eq(inquire(&r, i), 0);
+        global(&r, LSS_MODE_CONFIGURATION);
+        for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
+                ck_assert_uint_eq(inquire(&r, i), 1);
+                const lss_frame *f = last(&r);
+                ck_assert(lss_is_response(f));
+                ck_assert_uint_eq(f->data[0], 0x5A + i);
+                ck_assert_uint_eq(lss_get_u32(f->data + 1), lss_identity_field(&ID, i));
+                ck_assert_uint_eq(f->data[5] | f->data[6] | f->data[7], 0);
+        }
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_COUNT), 1);
+        expect_answer(&r, 0x5E, 0x22, 0);
+        /* unknown configuration cs: ignored */
+        lss_frame f;
+        lss_frame_request(&f, 0x5F);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        lss_frame_request(&f, 0x19);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+}
+END_TEST
+
+START_TEST(selective_switch) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        ck_assert_uint_eq(select_all(&r, &ID), 1);
+        expect_answer(&r, 0x44, 0, 0);
+        ck_assert(r.s.st.configuration);
+        /* already in configuration: selection is not processed */
+        ck_assert_uint_eq(select_all(&r, &ID), 0);
+        global(&r, LSS_MODE_WAITING);
+
+        /* one wrong field anywhere */
+        for (unsigned wrong = 0; wrong < LSS_FIELD_COUNT; wrong++) {
+                lss_identity other = ID;
+                lss_identity_set_field(&other, wrong, lss_identity_field(&ID, wrong) + 1);
+                ck_assert_uint_eq(select_all(&r, &other), 0);
+                ck_assert(!r.s.st.configuration);
+        }
+        /* out of order */
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_VENDOR, ID.vendor), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_REVISION, ID.revision), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_SERIAL, ID.serial), 0);
+        ck_assert(!r.s.st.configuration);
+        /* a mismatch resets: the rest of an earlier good sequence is not enough */
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_VENDOR, ID.vendor), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_PRODUCT, ID.product), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_REVISION, ID.revision + 1), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_SERIAL, ID.serial), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_REVISION, ID.revision), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_SERIAL, ID.serial), 0);
+        ck_assert(!r.s.st.configuration);
+        /* vendor restarts a sequence */
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_VENDOR, ID.vendor), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_VENDOR, ID.vendor + 1), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_PRODUCT, ID.product), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_REVISION, ID.revision), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_SERIAL, ID.serial), 0);
+        ck_assert(!r.s.st.configuration);
+        ck_assert_uint_eq(select_all(&r, &ID), 1);
+        ck_assert(r.s.st.configuration);
+}
+END_TEST
+
+START_TEST(identify_remote_ranges) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        const uint32_t rev = ID.revision, ser = ID.serial;
+        /* inclusive boundaries */
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, rev, rev, ser, ser), 1);
+        expect_answer(&r, 0x4F, 0, 0);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, 0, UINT32_MAX, 0, UINT32_MAX), 1);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, rev - 1, rev + 1, ser - 1, ser + 1), 1);
+        /* just outside each boundary */
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, rev + 1, UINT32_MAX, 0, UINT32_MAX), 0);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, 0, rev - 1, 0, UINT32_MAX), 0);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, 0, UINT32_MAX, ser + 1, UINT32_MAX), 0);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, 0, UINT32_MAX, 0, ser - 1), 0);
+        /* vendor and product must be equal */
+        ck_assert_uint_eq(identify(&r, ID.vendor + 1, ID.product, 0, UINT32_MAX, 0, UINT32_MAX), 0);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product - 1, 0, UINT32_MAX, 0, UINT32_MAX), 0);
+        /* a match is not carried over into the next sequence */
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, 0, UINT32_MAX, 0, UINT32_MAX), 1);
+
+        /* out of order or incomplete: no answer */
+        lss_frame f;
+        lss_encode_identify_remote(&f, 5, UINT32_MAX);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        lss_encode_identify_remote(&f, 0, ID.vendor);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        lss_encode_identify_remote(&f, 1, ID.product);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        lss_encode_identify_remote(&f, 3, UINT32_MAX); /* rev_low skipped */
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        lss_encode_identify_remote(&f, 4, 0);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        lss_encode_identify_remote(&f, 5, UINT32_MAX);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+
+        /* answered in configuration state and by non-configured slaves too */
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, rev, rev, ser, ser), 1);
+        rig_init(&r, 0xFF, NULL);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, rev, rev, ser, ser), 1);
+        ck_assert_uint_eq(r.s.changes, 0);
+}
+END_TEST
+
+START_TEST(identify_non_configured) {
+        lss_frame f;
+        lss_encode_identify_non_configured(&f);
+        rig r;
+        rig_init(&r, 0xFF, NULL);
+        ck_assert_uint_eq(ask(&r, &f), 1);
+        expect_answer(&r, 0x50, 0, 0);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(ask(&r, &f), 1);
+        /* a pending ID does not make it configured yet */
+        ck_assert_uint_eq(configure_node_id(&r, 0x10), 1);
+        ck_assert_uint_eq(ask(&r, &f), 1);
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+
+        rig_init(&r, 0x22, NULL);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+}
+END_TEST
+
+START_TEST(no_identify) {
+        lss_slave_faults fl;
+        lss_slave_faults_default(&fl);
+        fl.no_identify = true;
+        rig r;
+        rig_init(&r, 0xFF, &fl);
+        lss_frame f;
+        lss_encode_identify_non_configured(&f);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, 0, UINT32_MAX, 0, UINT32_MAX), 0);
+        /* the rest still works */
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        ck_assert_uint_eq(select_all(&r, &ID), 1);
+}
+END_TEST
+
+/* The master side of fastscan, against the rig's one slave. */
+static void scan(rig *r, lss_identity *found) {
+        ck_assert_uint_eq(fastscan(r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        for (unsigned sub = 0; sub < LSS_FIELD_COUNT; sub++) {
+                uint32_t v = 0;
+                for (int bit = 31; bit >= 0; bit--)
+                        if (fastscan(r, v, (uint8_t) bit, (uint8_t) sub, (uint8_t) sub) == 0)
+                                v |= UINT32_C(1) << bit;
+                ck_assert(!r->s.st.configuration);
+                ck_assert_uint_eq(fastscan(r, v, 0, (uint8_t) sub, (uint8_t) ((sub + 1) % LSS_FIELD_COUNT)), 1);
+                lss_identity_set_field(found, sub, v);
+        }
+}
+
+START_TEST(fastscan_full) {
+        rig r;
+        rig_init(&r, 0xFF, NULL);
+        lss_identity found = { 0 };
+        scan(&r, &found);
+        ck_assert(lss_identity_equal(&found, &ID));
+        ck_assert(r.s.st.configuration);
+        ck_assert_int_eq(r.s.fs_sub, -1);
+        /* in configuration: no more fastscan */
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 0);
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_SERIAL), 1);
+}
+END_TEST
+
+START_TEST(fastscan_bitcheck) {
+        rig r;
+        rig_init(&r, 0xFF, NULL);
+        /* no ping yet: not scanning */
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 1), 0);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        expect_answer(&r, 0x4F, 0, 0);
+        ck_assert_int_eq(r.s.fs_sub, 0);
+        /* bits bitcheck..31 compared, lower ones ignored */
+        ck_assert_uint_eq(fastscan(&r, ID.vendor ^ 0x7F, 7, 0, 0), 1);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor ^ 0x80, 7, 0, 0), 0);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor ^ 0x80000000u, 31, 0, 0), 0);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor & 0x80000000u, 31, 0, 0), 1);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor ^ 1, 0, 0, 1), 0);
+        ck_assert_int_eq(r.s.fs_sub, 0);
+        /* wrong sub: silence */
+        ck_assert_uint_eq(fastscan(&r, ID.product, 0, 1, 2), 0);
+        /* invalid: bitcheck 32..0x7F, 0x81.., sub or next > 3 */
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 32, 0, 1), 0);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0x7F, 0, 1), 0);
+        ck_assert_uint_eq(fastscan(&r, 0, 0x81, 0, 0), 0);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 4, 1), 0);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 4), 0); /* the lssnext = 4 bug */
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 4), 0);
+        ck_assert_int_eq(r.s.fs_sub, 0);
+        /* confirm vendor, jump straight to serial (known fields may be skipped) */
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 3), 1);
+        ck_assert_int_eq(r.s.fs_sub, 3);
+        ck_assert_uint_eq(fastscan(&r, ID.product, 0, 1, 2), 0);
+        ck_assert(!r.s.st.configuration);
+        /* lssnext == lsssub on the serial: stays, not yet found */
+        ck_assert_uint_eq(fastscan(&r, ID.serial, 0, 3, 3), 1);
+        ck_assert(!r.s.st.configuration);
+        /* lssnext back to 0 after the serial: found */
+        ck_assert_uint_eq(fastscan(&r, ID.serial, 0, 3, 0), 1);
+        ck_assert(r.s.st.configuration);
+}
+END_TEST
+
+START_TEST(fastscan_ping_resets) {
+        rig r;
+        rig_init(&r, 0xFF, NULL);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 1), 1);
+        ck_assert_uint_eq(fastscan(&r, ID.product, 0, 1, 2), 1);
+        ck_assert_int_eq(r.s.fs_sub, 2);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        ck_assert_int_eq(r.s.fs_sub, 0);
+        ck_assert_uint_eq(fastscan(&r, ID.revision, 0, 2, 3), 0);
+        /* an NMT reset forgets the scan */
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 0);
+        ck_assert_int_eq(r.s.fs_sub, -1);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 1), 0);
+}
+END_TEST
+
+START_TEST(fastscan_participation) {
+        rig r;
+        /* configured: not taking part */
+        rig_init(&r, 0x22, NULL);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 0);
+
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.fastscan_when_configured = true;
+        rig_init(&r, 0x22, &f);
+        lss_identity found = { 0 };
+        scan(&r, &found);
+        ck_assert(lss_identity_equal(&found, &ID));
+        ck_assert(r.s.st.configuration);
+
+        /* non-configured, but in configuration state: silent */
+        rig_init(&r, 0xFF, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 0);
+}
+END_TEST
+
+START_TEST(fastscan_early_config) {
+        static const enum lss_slave_early_config modes[] = {
+                SLAVE_EARLY_AFTER_VENDOR, SLAVE_EARLY_AFTER_PRODUCT, SLAVE_EARLY_AFTER_REVISION,
+        };
+        for (unsigned m = 0; m < 3; m++) {
+                lss_slave_faults f;
+                lss_slave_faults_default(&f);
+                f.early_config = modes[m];
+                rig r;
+                rig_init(&r, 0xFF, &f);
+                ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+                for (unsigned sub = 0; sub <= m; sub++) {
+                        ck_assert(!r.s.st.configuration);
+                        ck_assert_uint_eq(fastscan(&r, lss_identity_field(&ID, sub), 0, (uint8_t) sub,
+                                                   (uint8_t) (sub + 1)), 1);
+                }
+                ck_assert(r.s.st.configuration);
+                /* the rest of the scan goes unanswered */
+                ck_assert_uint_eq(fastscan(&r, lss_identity_field(&ID, m + 1), 0, (uint8_t) (m + 1),
+                                           (uint8_t) ((m + 2) % 4)), 0);
+        }
+}
+END_TEST
+
+START_TEST(needs_nmt_stopped) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.needs_nmt_stopped = true;
+        rig r;
+        rig_init(&r, 0x22, &f);
+        lss_frame g;
+        lss_encode_switch_global(&g, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(ask(&r, &g), 0);
+        ck_assert(!r.s.st.configuration);
+        ck_assert_uint_eq(select_all(&r, &ID), 0);
+        ck_assert_uint_eq(identify(&r, ID.vendor, ID.product, 0, UINT32_MAX, 0, UINT32_MAX), 0);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_START, 0), 0);
+        ck_assert_uint_eq(select_all(&r, &ID), 0);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_STOP, 0x22), 0);
+        ck_assert_uint_eq(select_all(&r, &ID), 1);
+        ck_assert(r.s.st.configuration);
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_COUNT), 1);
+        expect_answer(&r, 0x5E, 0x22, 0);
+}
+END_TEST
+
+START_TEST(strict_request_validation) {
+        rig r;
+        rig_init(&r, 0xFF, NULL);
+        lss_frame good, f;
+        lss_encode_switch_global(&good, LSS_MODE_CONFIGURATION);
+
+        f = good;
+        f.len = 7;
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        f = good;
+        f.len = 0;
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        static const uint8_t flags[] = { LSS_FRAME_EFF, LSS_FRAME_RTR, LSS_FRAME_FD, LSS_FRAME_ERR };
+        for (unsigned i = 0; i < 4; i++) {
+                f = good;
+                f.flags = flags[i];
+                ck_assert_uint_eq(ask(&r, &f), 0);
+        }
+        f = good;
+        f.id = LSS_COB_SLAVE;
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        f = good;
+        f.id = 0x7E6;
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        ck_assert(!r.s.st.configuration);
+        ck_assert_uint_eq(r.s.changes, 0);
+
+        /* and the ping, for an answering service */
+        lss_encode_fastscan(&f, 0, LSS_FASTSCAN_PING, 0, 0);
+        f.flags = LSS_FRAME_RTR;
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        f.flags = 0;
+        ck_assert_uint_eq(ask(&r, &f), 1);
+        ck_assert_uint_eq(ask(&r, &good), 0);
+        ck_assert(r.s.st.configuration);
+}
+END_TEST
+
+START_TEST(fault_silent) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.silent = true;
+        rig r;
+        rig_init(&r, 0xFF, &f);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 0);
+        ck_assert_uint_eq(select_all(&r, &ID), 0);
+        ck_assert(r.s.st.configuration); /* obeys */
+        ck_assert_uint_eq(configure_node_id(&r, 0x33), 0);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0x33);
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_COUNT), 0);
+        /* boot-ups still go out */
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(r.n, 1);
+        expect_bootup(&r, 0x33);
+}
+END_TEST
+
+START_TEST(fault_ignore_cs) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.ignore_cs = LSS_CS_STORE;
+        rig r;
+        rig_init(&r, 0x22, &f);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x40), 1);
+        ck_assert_uint_eq(store(&r), 0);
+        ck_assert_uint_eq(r.s.st.stored_node_id, 0x22);
+
+        f.ignore_cs = LSS_CS_SWITCH_GLOBAL;
+        rig_init(&r, 0x22, &f);
+        lss_frame g;
+        lss_encode_switch_global(&g, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(ask(&r, &g), 0);
+        ck_assert(!r.s.st.configuration);
+        ck_assert_uint_eq(select_all(&r, &ID), 1);
+}
+END_TEST
+
+START_TEST(fault_wrong_dlc_and_duplicates) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.wrong_dlc = true;
+        rig r;
+        rig_init(&r, 0x22, &f);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_COUNT), 1);
+        ck_assert_uint_eq(last(&r)->len, 7);
+        ck_assert(!lss_is_response(last(&r)));
+        ck_assert_uint_eq(last(&r)->data[0], 0x5E);
+        /* boot-ups are not LSS answers */
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 1);
+        ck_assert_uint_eq(last(&r)->len, 1);
+
+        lss_slave_faults_default(&f);
+        f.duplicate_answers = true;
+        f.latency_us = 300;
+        rig_init(&r, 0x22, &f);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_SERIAL), 2);
+        ck_assert_mem_eq(&r.out[0], &r.out[1], sizeof(lss_frame));
+        ck_assert_uint_eq(r.delay[0], 300);
+        ck_assert_uint_eq(r.delay[1], 300);
+        ck_assert_uint_eq(lss_get_u32(r.out[1].data + 1), ID.serial);
+}
+END_TEST
+
+START_TEST(fault_configure_error_specific) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.configure_error_specific = true;
+        rig r;
+        rig_init(&r, 0xFF, &f);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x10), 1);
+        expect_answer(&r, 0x11, LSS_ERR_SPECIFIC, 0x42);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0xFF);
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(r.n, 1);
+}
+END_TEST
+
+static void collect_delays(uint64_t seed, uint32_t lat, uint32_t jit, uint64_t *d, unsigned n) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.latency_us = lat;
+        f.jitter_us = jit;
+        rig r;
+        rig_init(&r, 0xFF, &f);
+        r.s.rng = seed;
+        for (unsigned i = 0; i < n; i++) {
+                /* spaced out so that the transmit queue does not hold them back */
+                r.now += 10000;
+                ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+                d[i] = r.delay[i];
+        }
+}
+
+START_TEST(latency_and_jitter) {
+        enum { N = 40 };
+        uint64_t a[N], b[N], c[N];
+        collect_delays(7, 500, 0, a, N);
+        for (unsigned i = 0; i < N; i++)
+                ck_assert_uint_eq(a[i], 500);
+
+        collect_delays(7, 500, 1000, a, N);
+        collect_delays(7, 500, 1000, b, N);
+        collect_delays(8, 500, 1000, c, N);
+        ck_assert_mem_eq(a, b, sizeof(a));
+        bool differs = false, spread = false;
+        for (unsigned i = 0; i < N; i++) {
+                ck_assert_uint_ge(a[i], 500);
+                ck_assert_uint_le(a[i], 1500);
+                differs |= a[i] != c[i];
+                spread |= a[i] != a[0];
+        }
+        ck_assert(differs);
+        ck_assert(spread);
+}
+END_TEST
+
+START_TEST(answers_keep_order) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.latency_us = 100;
+        f.jitter_us = 5000;
+        rig r;
+        rig_init(&r, 0x22, &f);
+        global(&r, LSS_MODE_CONFIGURATION);
+        /* back-to-back requests: ready times never go backwards */
+        uint64_t prev = 0;
+        for (unsigned i = 0; i < 30; i++) {
+                r.now += 10;
+                ck_assert_uint_eq(inquire(&r, i % 5), 1);
+                uint64_t ready = r.now + r.delay[r.n - 1];
+                ck_assert_uint_ge(ready, prev);
+                ck_assert_uint_ge(r.delay[r.n - 1], 100);
+                prev = ready;
+        }
+}
+END_TEST
+
+START_TEST(changes_counter) {
+        rig r;
+        rig_init(&r, 0xFF, NULL);
+        unsigned c = r.s.changes;
+        /* no state change, no count */
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        lss_frame f;
+        lss_encode_identify_non_configured(&f);
+        ck_assert_uint_eq(ask(&r, &f), 1);
+        ck_assert_uint_eq(r.s.changes, c);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(r.s.changes, ++c);
+        ck_assert_uint_eq(inquire(&r, LSS_FIELD_VENDOR), 1);
+        ck_assert_uint_eq(r.s.changes, c);
+        ck_assert_uint_eq(configure_node_id(&r, 0x12), 1);
+        ck_assert_uint_eq(r.s.changes, ++c);
+        ck_assert_uint_eq(configure_node_id(&r, 0x12), 1); /* same value again */
+        ck_assert_uint_eq(r.s.changes, c);
+        ck_assert_uint_eq(store(&r), 1);
+        ck_assert_uint_eq(r.s.changes, ++c);
+        ck_assert_uint_eq(bit_timing(&r, 0, 3), 1);
+        ck_assert_uint_eq(r.s.changes, ++c);
+        ck_assert_uint_eq(activate(&r, 1), 0);
+        ck_assert_uint_eq(r.s.changes, c);
+        lss_slave_on_time(&r.s, r.now + 1000);
+        ck_assert_uint_eq(r.s.changes, ++c); /* the switch */
+        lss_slave_on_time(&r.s, r.now + 5000);
+        ck_assert_uint_eq(r.s.changes, c);
+        r.now += 5000;
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(r.s.changes, ++c);
+        lss_slave_power_on(&r.s, r.now);
+        ck_assert_uint_eq(r.s.changes, ++c); /* stored bit index 4 back */
+}
+END_TEST
+
+START_TEST(no_emit_callback) {
+        lss_slave s;
+        lss_slave_init(&s, &ID, 0xFF, 4, NULL, 1, NULL, NULL);
+        lss_frame f;
+        lss_encode_switch_global(&f, LSS_MODE_CONFIGURATION);
+        lss_slave_on_frame(&s, &f, 0);
+        lss_encode_configure_node_id(&f, 9);
+        lss_slave_on_frame(&s, &f, 0);
+        lss_encode_switch_global(&f, LSS_MODE_WAITING);
+        lss_slave_on_frame(&s, &f, 0);
+        ck_assert_uint_eq(s.st.active_node_id, 9);
+}
+END_TEST
+
+int main(void) {
+        Suite *s = suite_create("slave");
+        TCase *tc = tcase_create("core");
+        tcase_add_test(tc, init_and_defaults);
+        tcase_add_test(tc, switch_global_modes);
+        tcase_add_test(tc, configure_node_id_errors);
+        tcase_add_test(tc, non_configured_applies_id_on_waiting);
+        tcase_add_test(tc, non_configured_without_id_stays_silent);
+        tcase_add_test(tc, configured_applies_id_on_reset_comm);
+        tcase_add_test(tc, reset_comm_leaves_configuration);
+        tcase_add_test(tc, nmt_states);
+        tcase_add_test(tc, store_and_power_on);
+        tcase_add_test(tc, power_on_non_configured);
+        tcase_add_test(tc, reset_node_restores_stored);
+        tcase_add_test(tc, store_errors);
+        tcase_add_test(tc, bit_timing_errors);
+        tcase_add_test(tc, activation_window);
+        tcase_add_test(tc, activation_switch_without_on_time);
+        tcase_add_test(tc, activation_zero_delay_and_missed);
+        tcase_add_test(tc, power_on_cancels_activation);
+        tcase_add_test(tc, inquire_services);
+        tcase_add_test(tc, selective_switch);
+        tcase_add_test(tc, identify_remote_ranges);
+        tcase_add_test(tc, identify_non_configured);
+        tcase_add_test(tc, no_identify);
+        tcase_add_test(tc, fastscan_full);
+        tcase_add_test(tc, fastscan_bitcheck);
+        tcase_add_test(tc, fastscan_ping_resets);
+        tcase_add_test(tc, fastscan_participation);
+        tcase_add_test(tc, fastscan_early_config);
+        tcase_add_test(tc, needs_nmt_stopped);
+        tcase_add_test(tc, strict_request_validation);
+        tcase_add_test(tc, fault_silent);
+        tcase_add_test(tc, fault_ignore_cs);
+        tcase_add_test(tc, fault_wrong_dlc_and_duplicates);
+        tcase_add_test(tc, fault_configure_error_specific);
+        tcase_add_test(tc, latency_and_jitter);
+        tcase_add_test(tc, answers_keep_order);
+        tcase_add_test(tc, changes_counter);
+        tcase_add_test(tc, no_emit_callback);
+        suite_add_tcase(s, tc);
+        SRunner *sr = srunner_create(s);
+        srunner_run_all(sr, CK_NORMAL);
+        int failed = srunner_ntests_failed(sr);
+        srunner_free(sr);
+        return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
