@@ -7,13 +7,13 @@
 #include "lss/lss_internal.h"
 
 /* Send an unconfirmed frame (no wait). */
-#define SEND(m, pc, frame_expr) STEP_REQUEST(m, pc, frame_expr, -1, false)
+#define SEND(m, pc, frame_expr) STEP_REQUEST(m, pc, frame_expr, -1)
 
 /* The part shared by both ways in: the slave is the only one in configuration. */
 static int assign_tail(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->tail_pc);
         for (s->attempt = 0;; s->attempt++) {
-                STEP_REQUEST(m, &s->tail_pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID, false);
+                STEP_REQUEST(m, &s->tail_pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
                 if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
                         break;
                 m->stats.retries++;
@@ -35,8 +35,8 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
         }
 
         for (s->attempt = 0;; s->attempt++) {
-                STEP_REQUEST(m, &s->tail_pc, lss_encode_configure_node_id(&f__, s->node_id), LSS_CS_CONFIGURE_NODE_ID,
-                             false);
+                STEP_REQUEST(m, &s->tail_pc, lss_encode_configure_node_id(&f__, s->node_id),
+                             LSS_CS_CONFIGURE_NODE_ID);
                 if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
                         break;
                 m->stats.retries++;
@@ -60,7 +60,7 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
 
         if (s->flags & LSS_ASSIGN_STORE) {
                 for (s->attempt = 0;; s->attempt++) {
-                        STEP_REQUEST(m, &s->tail_pc, lss_encode_store(&f__), LSS_CS_STORE, false);
+                        STEP_REQUEST(m, &s->tail_pc, lss_encode_store(&f__), LSS_CS_STORE);
                         if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
                                 break;
                         m->stats.retries++;
@@ -110,7 +110,7 @@ int proc_assign(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->pc);
         m->result.id = s->id;
         for (s->attempt = 0;; s->attempt++) {
-                step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE, false);
+                step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE);
                 for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
                         lss_frame f;
                         lss_encode_switch_selective(&f, i, lss_identity_field(&s->id, i));
@@ -151,7 +151,7 @@ int proc_fastscan_assign(lss_master *m, lss_assign_state *s) {
                  * from exactly one slave */
                 for (s->field = 0; s->field < LSS_FIELD_COUNT; s->field++) {
                         STEP_REQUEST(m, &s->pc, lss_encode_inquire(&f__, s->field),
-                                     LSS_CS_INQUIRE_VENDOR + (int) s->field, false);
+                                     LSS_CS_INQUIRE_VENDOR + (int) s->field);
                         if (!step_answered(m) || step_conflict(m) ||
                             lss_get_u32(m->step.answer.data + 1) != lss_identity_field(&s->id, s->field))
                                 break;

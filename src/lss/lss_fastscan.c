@@ -22,7 +22,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         PT_BEGIN(&s->pc);
         s->found = s->none = false;
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {
-                step_lss(m, LSS_CS_IDENTIFY_SLAVE, true);
+                step_lss(m, LSS_CS_IDENTIFY_SLAVE);
                 m->step.discovery = true;
                 {
                         lss_frame f;
@@ -50,7 +50,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                              lss_encode_fastscan(&f__, s->value[s->sub],
                                                                                  (uint8_t) s->bit, (uint8_t) s->sub,
                                                                                  (uint8_t) s->sub),
-                                                             LSS_CS_IDENTIFY_SLAVE, true);
+                                                             LSS_CS_IDENTIFY_SLAVE);
                                                 if (!step_answered(m))
                                                         s->value[s->sub] |= 1u << s->bit;
                                                 master_progress(m, (s->sub * 33.0 + (32 - s->bit)) / 133.0);
@@ -59,7 +59,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 STEP_REQUEST(m, &s->pc,
                                              lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
                                                                  (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)),
-                                             LSS_CS_IDENTIFY_SLAVE, true);
+                                             LSS_CS_IDENTIFY_SLAVE);
                                 if (step_answered(m))
                                         break;
                                 /* Nobody matched, so the slaves still expect this

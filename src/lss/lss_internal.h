@@ -32,7 +32,6 @@ typedef struct lss_step {
         lss_frame tx[LSS_MAX_TX];
         unsigned n_tx;
         int expect_cs;         /* -1: unconfirmed */
-        bool multi;            /* several slaves may answer (fastscan, identify) */
         bool discovery;        /* first contact: full configured wait */
         uint8_t bootup_node;
         uint32_t wait_us;      /* STEP_BOOTUP / STEP_DELAY */
@@ -114,7 +113,7 @@ struct lss_master {
 };
 
 /* step.c */
-void step_lss(lss_master *m, int expect_cs, bool multi);
+void step_lss(lss_master *m, int expect_cs);
 void step_add_tx(lss_master *m, const lss_frame *f);
 void step_start(lss_master *m);
 void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx);
@@ -124,8 +123,8 @@ bool step_answered(const lss_master *m);
 bool step_conflict(const lss_master *m);
 
 /* Start a one-frame confirmed/unconfirmed LSS step and return from the coroutine until it is done. */
-#define STEP_REQUEST(m, pc, frame_expr, cs, multi)  \
-        do { lss_frame f__; frame_expr; step_lss(m, cs, multi); step_add_tx(m, &f__); step_start(m); \
+#define STEP_REQUEST(m, pc, frame_expr, cs)  \
+        do { lss_frame f__; frame_expr; step_lss(m, cs); step_add_tx(m, &f__); step_start(m); \
              PT_YIELD(pc); } while (0)
 
 /* master.c */

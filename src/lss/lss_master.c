@@ -146,13 +146,13 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
 
 static int proc_switch_global(lss_master *m) {
         PT_BEGIN(&m->pc);
-        STEP_REQUEST(m, &m->pc, lss_encode_switch_global(&f__, m->arg.sg.mode), -1, false);
+        STEP_REQUEST(m, &m->pc, lss_encode_switch_global(&f__, m->arg.sg.mode), -1);
         PT_END(&m->pc);
 }
 
 static int proc_switch_selective(lss_master *m) {
         PT_BEGIN(&m->pc);
-        step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE, false);
+        step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE);
         for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
                 lss_frame f;
                 lss_encode_switch_selective(&f, i, lss_identity_field(&m->sel_id, i));
@@ -192,7 +192,7 @@ static bool error_code_ok(lss_master *m, const char *what) {
 
 static int proc_configure_node_id(lss_master *m) {
         PT_BEGIN(&m->pc);
-        STEP_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, m->arg.raw.a), LSS_CS_CONFIGURE_NODE_ID, false);
+        STEP_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, m->arg.raw.a), LSS_CS_CONFIGURE_NODE_ID);
         if (single_answer_ok(m, "Configure Node-ID"))
                 error_code_ok(m, "Configure Node-ID");
         PT_END(&m->pc);
@@ -201,7 +201,7 @@ static int proc_configure_node_id(lss_master *m) {
 static int proc_configure_bit_timing(lss_master *m) {
         PT_BEGIN(&m->pc);
         STEP_REQUEST(m, &m->pc, lss_encode_configure_bit_timing(&f__, m->arg.raw.a, m->arg.raw.b),
-                     LSS_CS_CONFIGURE_BIT_TIMING, false);
+                     LSS_CS_CONFIGURE_BIT_TIMING);
         if (single_answer_ok(m, "Configure Bit Timing"))
                 error_code_ok(m, "Configure Bit Timing");
         PT_END(&m->pc);
@@ -209,13 +209,13 @@ static int proc_configure_bit_timing(lss_master *m) {
 
 static int proc_activate_bit_timing(lss_master *m) {
         PT_BEGIN(&m->pc);
-        STEP_REQUEST(m, &m->pc, lss_encode_activate_bit_timing(&f__, m->arg.raw.u16), -1, false);
+        STEP_REQUEST(m, &m->pc, lss_encode_activate_bit_timing(&f__, m->arg.raw.u16), -1);
         PT_END(&m->pc);
 }
 
 static int proc_store(lss_master *m) {
         PT_BEGIN(&m->pc);
-        STEP_REQUEST(m, &m->pc, lss_encode_store(&f__), LSS_CS_STORE, false);
+        STEP_REQUEST(m, &m->pc, lss_encode_store(&f__), LSS_CS_STORE);
         if (single_answer_ok(m, "Store Configuration"))
                 error_code_ok(m, "Store Configuration");
         PT_END(&m->pc);
@@ -227,7 +227,7 @@ static const char *const inquire_names[] = { "Inquire Vendor-ID", "Inquire Produ
 static int proc_inquire(lss_master *m) {
         PT_BEGIN(&m->pc);
         STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.field),
-                     LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.field, false);
+                     LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.field);
         if (single_answer_ok(m, inquire_names[m->arg.inq.field])) {
                 if (m->arg.inq.field == LSS_FIELD_COUNT)
                         m->result.node_id = m->step.answer.data[1];
@@ -241,7 +241,7 @@ static int proc_inquire_identity(lss_master *m) {
         PT_BEGIN(&m->pc);
         for (m->arg.inq.i = 0; m->arg.inq.i < LSS_FIELD_COUNT; m->arg.inq.i++) {
                 STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.i),
-                             LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.i, false);
+                             LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.i);
                 if (!single_answer_ok(m, inquire_names[m->arg.inq.i]))
                         break;
                 lss_identity_set_field(&m->result.id, m->arg.inq.i, lss_get_u32(m->step.answer.data + 1));
@@ -251,7 +251,7 @@ static int proc_inquire_identity(lss_master *m) {
 
 static int proc_identify_remote(lss_master *m) {
         PT_BEGIN(&m->pc);
-        step_lss(m, LSS_CS_IDENTIFY_SLAVE, true);
+        step_lss(m, LSS_CS_IDENTIFY_SLAVE);
         m->step.discovery = true;
         {
                 const lss_identify_range *r = &m->arg.ir;
@@ -270,7 +270,7 @@ static int proc_identify_remote(lss_master *m) {
 
 static int proc_identify_non_configured(lss_master *m) {
         PT_BEGIN(&m->pc);
-        step_lss(m, LSS_CS_IDENTIFY_NON_CONFIGURED_SLAVE, true);
+        step_lss(m, LSS_CS_IDENTIFY_NON_CONFIGURED_SLAVE);
         m->step.discovery = true;
         {
                 lss_frame f;
@@ -285,7 +285,7 @@ static int proc_identify_non_configured(lss_master *m) {
 
 static int proc_nmt(lss_master *m) {
         PT_BEGIN(&m->pc);
-        STEP_REQUEST(m, &m->pc, nmt_encode(&f__, m->arg.nmt.cs, m->arg.nmt.node), -1, false);
+        STEP_REQUEST(m, &m->pc, nmt_encode(&f__, m->arg.nmt.cs, m->arg.nmt.node), -1);
         PT_END(&m->pc);
 }
 

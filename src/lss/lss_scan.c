@@ -52,7 +52,7 @@ static int verify_candidates(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->vpc);
         s->dropped = 0;
         for (s->i = 0; s->i < s->n_cand; s->i++) {
-                step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE, false);
+                step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE);
                 for (unsigned f = 0; f < LSS_FIELD_COUNT; f++) {
                         lss_frame fr;
                         lss_encode_switch_selective(&fr, f, lss_identity_field(&s->cand[s->i].id, f));
@@ -64,7 +64,7 @@ static int verify_candidates(lss_master *m, lss_scan_state *s) {
                         s->dropped++;
                         continue;
                 }
-                STEP_REQUEST(m, &s->vpc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID, false);
+                STEP_REQUEST(m, &s->vpc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
                 if (step_answered(m) && !step_conflict(m)) {
                         s->cand[s->i].node_id = m->step.answer.data[1];
                         if (master_add_device(m, &s->cand[s->i].id, s->cand[s->i].node_id) < 0) {
@@ -73,7 +73,7 @@ static int verify_candidates(lss_master *m, lss_scan_state *s) {
                         }
                 } else
                         s->dropped++;
-                STEP_REQUEST(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1, false);
+                STEP_REQUEST(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
                 master_progress(m, 0.9 + 0.1 * (s->i + 1) / (double) s->n_cand);
         }
         PT_END(&s->vpc);
@@ -111,7 +111,7 @@ int proc_enumerate(lss_master *m) {
                         }
                         master_progress(m, 0.9 * (1.0 - 1.0 / (1.0 + (double) s->n_cand)));
                 }
-                STEP_REQUEST(m, &m->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1, false);
+                STEP_REQUEST(m, &m->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
                 s->vpc = 0;
                 PT_CALL(&m->pc, verify_candidates(m, s));
                 if (m->result.status != LSS_OK || s->dropped == 0)
@@ -149,7 +149,7 @@ int proc_slowscan(lss_master *m) {
         while (s->n_stack > 0) {
                 s->n_stack--;
                 s->cur = s->stack[s->n_stack];
-                step_lss(m, LSS_CS_IDENTIFY_SLAVE, true);
+                step_lss(m, LSS_CS_IDENTIFY_SLAVE);
                 m->step.discovery = s->i++ == 0;
                 {
                         const uint32_t v[6] = { s->range.vendor, s->range.product, s->cur.rlo,

@@ -8,11 +8,10 @@
 
 #include "lss/lss_internal.h"
 
-void step_lss(lss_master *m, int expect_cs, bool multi) {
+void step_lss(lss_master *m, int expect_cs) {
         m->step = (lss_step) {
                 .kind = STEP_LSS,
                 .expect_cs = expect_cs,
-                .multi = multi,
         };
 }
 
