@@ -5,11 +5,13 @@
 
 #include <errno.h>
 #include <libmnl/libmnl.h>
-#include <limits.h>
 #include <linux/can/netlink.h>
 #include <linux/if_link.h>
 #include <linux/rtnetlink.h>
 #include <string.h>
+
+/* Errors the kernel can report are -1..-4095; anything else is junk. */
+#define MAX_ERRNO 4095
 
 typedef struct link_attrs {
         rtnl_link *link;
@@ -91,14 +93,27 @@ static int parse_link(const struct nlmsghdr *nlh, rtnl_link_cb cb, void *userdat
         return 0;
 }
 
+/* Whether a whole message starts at p with `left` bytes to go. Not
+ * mnl_nlmsg_ok(): it compares nlmsg_len as an int, so a length of 2^31 or
+ * more passes and mnl_nlmsg_next() then jumps outside the buffer. */
+static bool msg_ok(const char *p, size_t left) {
+        const struct nlmsghdr *nlh = (const struct nlmsghdr *) p;
+
+        return left >= sizeof(*nlh) && nlh->nlmsg_len >= sizeof(*nlh) && nlh->nlmsg_len <= left;
+}
+
 int rtnl_parse(const void *buf, size_t len, rtnl_link_cb cb, void *userdata, uint32_t *seq) {
-        const struct nlmsghdr *nlh = buf;
-        int remaining = len > INT_MAX ? INT_MAX : (int) len;
+        const char *p = buf;
+        size_t left = len;
 
         if (!buf)
                 return len == 0 ? 0 : -EBADMSG;
 
-        for (; mnl_nlmsg_ok(nlh, remaining); nlh = mnl_nlmsg_next(nlh, &remaining)) {
+        while (msg_ok(p, left)) {
+                const struct nlmsghdr *nlh = (const struct nlmsghdr *) p;
+                size_t step = ((size_t) nlh->nlmsg_len + NLMSG_ALIGNTO - 1) & ~((size_t) NLMSG_ALIGNTO - 1);
+
+
                 switch (nlh->nlmsg_type) {
                 case RTM_NEWLINK:
                 case RTM_DELLINK:
@@ -113,6 +128,8 @@ int rtnl_parse(const void *buf, size_t len, rtnl_link_cb cb, void *userdata, uin
                                 memcpy(&err, mnl_nlmsg_get_payload(nlh), sizeof(err));
                         if (seq)
                                 *seq = nlh->nlmsg_seq;
+                        if (err < -MAX_ERRNO)
+                                return -EBADMSG;
                         return err < 0 ? err : 1;
                 }
                 case NLMSG_ERROR: {
@@ -123,16 +140,20 @@ int rtnl_parse(const void *buf, size_t len, rtnl_link_cb cb, void *userdata, uin
                         memcpy(&e, mnl_nlmsg_get_payload(nlh), sizeof(e));
                         if (seq)
                                 *seq = nlh->nlmsg_seq;
-                        if (e.error > 0 || e.error == INT_MIN)
+                        if (e.error > 0 || e.error < -MAX_ERRNO)
                                 return -EBADMSG;
                         return e.error < 0 ? e.error : 1;
                 }
                 default:
                         break; /* NLMSG_NOOP, NLMSG_OVERRUN, other families' types */
                 }
+                /* The last message may lack its padding. */
+                if (step >= left)
+                        return 0;
+                p += step;
+                left -= step;
         }
-        /* mnl_nlmsg_next may go below 0 for a last message without padding. */
-        return remaining > 0 ? -EBADMSG : 0;
+        return left > 0 ? -EBADMSG : 0;
 }
 
 static struct nlmsghdr *put_link_request(void *buf, size_t size, uint32_t seq, uint16_t type, uint16_t flags,
@@ -142,6 +163,8 @@ static struct nlmsghdr *put_link_request(void *buf, size_t size, uint32_t seq, u
 
         if (size < mnl_nlmsg_size(sizeof(*ifi)))
                 return NULL;
+        /* libmnl (1.0.4) leaves attribute padding as it finds it: never send stack garbage. */
+        memset(buf, 0, size);
         nlh = mnl_nlmsg_put_header(buf);
         nlh->nlmsg_type = type;
         nlh->nlmsg_flags = NLM_F_REQUEST | flags;

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 #include "can/socketcan.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
@@ -347,6 +348,16 @@ int socketcan_port_reopen(socketcan_port *p) {
         return open_socket(p);
 }
 
+/* The kernel's rules for netdev names (dev_valid_name). */
+static bool ifname_valid(const char *name, size_t len) {
+        if (len == 0 || len >= IFNAMSIZ || strcmp(name, ".") == 0 || strcmp(name, "..") == 0)
+                return false;
+        for (size_t i = 0; i < len; i++)
+                if (name[i] == '/' || name[i] == ':' || isspace((unsigned char) name[i]))
+                        return false;
+        return true;
+}
+
 int socketcan_port_open(const char *ifname, const socketcan_config *cfg, socketcan_port **ret) {
         socketcan_port *p;
         size_t len;
@@ -355,7 +366,7 @@ int socketcan_port_open(const char *ifname, const socketcan_config *cfg, socketc
         if (!ifname || !ret)
                 return -EINVAL;
         len = strlen(ifname);
-        if (len == 0 || len >= IFNAMSIZ || strchr(ifname, '/') || strchr(ifname, ' '))
+        if (!ifname_valid(ifname, len))
                 return -EINVAL;
 
         p = calloc(1, sizeof(*p));

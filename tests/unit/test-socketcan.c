@@ -11,6 +11,7 @@
 #include <string.h>
 #include <sys/socket.h>
 #include <sys/time.h>
+#include <sys/un.h>
 #include <unistd.h>
 
 #include "can/socketcan.h"
@@ -570,6 +571,11 @@ START_TEST(open_bad_names) {
         ck_assert_int_eq(socketcan_port_open("", &cfg, &p), -EINVAL);
         ck_assert_int_eq(socketcan_port_open("0123456789abcdef", &cfg, &p), -EINVAL); /* 16 > IFNAMSIZ-1 */
         ck_assert_int_eq(socketcan_port_open("a/b", &cfg, &p), -EINVAL);
+        ck_assert_int_eq(socketcan_port_open("can:0", &cfg, &p), -EINVAL);
+        ck_assert_int_eq(socketcan_port_open("can 0", &cfg, &p), -EINVAL);
+        ck_assert_int_eq(socketcan_port_open("can\t0", &cfg, &p), -EINVAL);
+        ck_assert_int_eq(socketcan_port_open("..", &cfg, &p), -EINVAL);
+        ck_assert_int_eq(socketcan_port_open(".", &cfg, &p), -EINVAL);
         ck_assert_int_eq(socketcan_port_open(NULL, &cfg, &p), -EINVAL);
         ck_assert_int_eq(socketcan_port_open("can0", &cfg, NULL), -EINVAL);
         ck_assert_ptr_null(p);
@@ -1449,6 +1455,36 @@ START_TEST(real_io_on_socketpair) {
 }
 END_TEST
 
+/* The real wrappers keep the negative-errno convention. */
+START_TEST(real_sys_wrappers) {
+        const can_sys *d = can_sys_default();
+        const int one = 1;
+        struct sockaddr_un bad = { .sun_family = AF_UNIX, .sun_path = "/nonexistent-dir/x" };
+        struct timespec ts;
+        unsigned flags = 0;
+        int fd;
+
+        fd = d->socket(NULL, AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+        ck_assert_int_ge(fd, 0);
+        ck_assert_int_eq(d->setsockopt(NULL, fd, SOL_SOCKET, SO_PASSCRED, &one, sizeof(one)), 0);
+        ck_assert_int_lt(d->setsockopt(NULL, fd, SOL_CAN_RAW, CAN_RAW_FILTER, &one, sizeof(one)), 0); /* EOPNOTSUPP here */
+        ck_assert_int_eq(d->bind(NULL, fd, (const struct sockaddr *) &bad, sizeof(bad)), -ENOENT);
+        /* SIOCGIFFLAGS works on any socket */
+        ck_assert_int_eq(d->if_flags(NULL, fd, "lo", &flags), 0);
+        ck_assert(flags & IFF_LOOPBACK);
+        ck_assert_int_eq(d->if_flags(NULL, fd, "lssnosuch0", &flags), -ENODEV);
+        ck_assert_int_eq(d->if_flags(NULL, fd, "0123456789abcdef", &flags), -EINVAL);
+        ck_assert_int_eq(d->if_nametoindex(NULL, "lo"), 1);
+        ck_assert_int_eq(d->if_nametoindex(NULL, "lssnosuch0"), -ENODEV);
+        ck_assert_int_eq(d->clock_gettime(NULL, CLOCK_MONOTONIC, &ts), 0);
+        ck_assert_int_eq(d->clock_gettime(NULL, (clockid_t) 12345, &ts), -EINVAL);
+        ck_assert_int_eq(d->close(NULL, fd), 0);
+        ck_assert_int_eq(d->close(NULL, fd), -EBADF);
+        ck_assert_int_eq(d->socket(NULL, 12345, SOCK_DGRAM, 0), -EAFNOSUPPORT);
+        ck_assert_int_eq(d->write(NULL, -1, "x", 1), -EBADF);
+}
+END_TEST
+
 int main(void) {
         Suite *s = suite_create("socketcan");
         TCase *tc = tcase_create("core");
@@ -1484,6 +1520,7 @@ int main(void) {
         tcase_add_test(tc, transport_defaults_and_names);
         tcase_add_test(tc, real_host_open);
         tcase_add_test(tc, real_io_on_socketpair);
+        tcase_add_test(tc, real_sys_wrappers);
         suite_add_tcase(s, tc);
 
         SRunner *sr = srunner_create(s);
