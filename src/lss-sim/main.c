@@ -29,6 +29,7 @@ typedef struct context {
         uint64_t reopen_at_us;    /* interface gone: next try, UINT64_MAX none */
         bool down_reported;
         uint32_t drops;           /* last SO_RXQ_OVFL count */
+        uint64_t tx_waits;        /* times the transmit queue was full */
         bool stop;
 } context;
 
@@ -93,6 +94,8 @@ static int send_frame(context *c, const lss_frame *f) {
                 }
                 if (r != -ENOBUFS && r != -EAGAIN)
                         return r;
+                if (tries == 0)
+                        c->tx_waits++;
                 if (tries > 0) {
                         struct pollfd p = { .fd = c->signal_fd, .events = POLLIN };
                         struct timespec pause = { .tv_nsec = 200000 };
@@ -169,10 +172,6 @@ static void try_reopen(context *c, uint64_t t) {
 static int run_loop(context *c) {
         while (!c->stop) {
                 uint64_t t = now_us(), wake;
-                struct pollfd p[2] = {
-                        { .fd = c->signal_fd, .events = POLLIN },
-                        { .fd = c->can_fd, .events = POLLIN },
-                };
                 struct timespec ts, *timeout = NULL;
 
                 if (c->can_fd < 0 && c->reopen_at_us <= t)
@@ -201,6 +200,11 @@ static int run_loop(context *c) {
                                                  .tv_nsec = (long) (d % 1000000u) * 1000 };
                         timeout = &ts;
                 }
+                /* built here: sending may have lost the socket, a reopen found it */
+                struct pollfd p[2] = {
+                        { .fd = c->signal_fd, .events = POLLIN },
+                        { .fd = c->can_fd, .events = POLLIN },
+                };
                 if (ppoll(p, c->can_fd >= 0 ? 2 : 1, timeout, NULL) < 0) {
                         if (errno == EINTR)
                                 continue;
@@ -272,8 +276,9 @@ int main(int argc, char **argv) {
                 goto finish;
         if (c.opts.verbose)
                 fprintf(stderr, "lss-sim: %" PRIu64 " frames received, %" PRIu64 " sent, %" PRIu64
-                        " merged, %" PRIu64 " dropped\n", c.sim->stats.rx_frames, c.sim->stats.tx_frames,
-                        c.sim->stats.merged_frames, c.sim->stats.dropped_frames);
+                        " merged, %" PRIu64 " dropped, transmit queue full %" PRIu64 " times\n",
+                        c.sim->stats.rx_frames, c.sim->stats.tx_frames, c.sim->stats.merged_frames,
+                        c.sim->stats.dropped_frames, c.tx_waits);
         ret = EXIT_SUCCESS;
 
 finish:

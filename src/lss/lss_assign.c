@@ -34,6 +34,27 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                 goto out;
         }
 
+        if (s->taken && s->taken[s->node_id]) {
+                m->result.in_use = true;
+                master_fail(m, LSS_E_CONFLICT, "node-ID %u already answered on the bus", s->node_id);
+                goto out;
+        }
+        if (s->flags & LSS_ASSIGN_CHECK_FREE) {
+                /* every CANopen device answers an SDO upload of object 0x1000 */
+                m->step = (lss_step) { .kind = STEP_SDO, .bootup_node = s->node_id, .discovery = true };
+                {
+                        lss_frame f = { .id = 0x600u + s->node_id, .len = 8, .data = { 0x40, 0x00, 0x10, 0x00 } };
+                        step_add_tx(m, &f);
+                }
+                step_start(m);
+                PT_YIELD(&s->tail_pc);
+                if (m->step.n_answers > 0) {
+                        m->result.in_use = true;
+                        master_fail(m, LSS_E_CONFLICT, "node-ID %u already answers on the bus", s->node_id);
+                        goto out;
+                }
+        }
+
         for (s->attempt = 0;; s->attempt++) {
                 STEP_REQUEST(m, &s->tail_pc, lss_encode_configure_node_id(&f__, s->node_id),
                              LSS_CS_CONFIGURE_NODE_ID);
@@ -106,8 +127,16 @@ static void identity_of_scan(lss_assign_state *s) {
                 lss_identity_set_field(&s->id, i, s->fs.value[i]);
 }
 
+/* Each assignment reports only on itself (a pass runs many). */
+static void result_reset(lss_master *m) {
+        m->result.changed = m->result.in_use = false;
+        m->result.err = m->result.spec = 0;
+        m->result.node_id = LSS_NODE_ID_UNCONFIGURED;
+}
+
 int proc_assign(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->pc);
+        result_reset(m);
         m->result.id = s->id;
         for (s->attempt = 0;; s->attempt++) {
                 step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE);
@@ -129,12 +158,16 @@ int proc_assign(lss_master *m, lss_assign_state *s) {
         }
         s->tail_pc = 0;
         PT_CALL(&s->pc, assign_tail(m, s));
-out:;
+out:
+        /* a pass goes on after a failed assignment: nobody may stay selected */
+        if (m->result.status != LSS_OK)
+                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         PT_END(&s->pc);
 }
 
 int proc_fastscan_assign(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->pc);
+        result_reset(m);
         for (s->attempt = 0;; s->attempt++) {
                 s->fs.pc = 0;
                 PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
@@ -170,6 +203,9 @@ int proc_fastscan_assign(lss_master *m, lss_assign_state *s) {
         m->result.id = s->id;
         s->tail_pc = 0;
         PT_CALL(&s->pc, assign_tail(m, s));
-out:;
+out:
+        /* a pass goes on after a failed assignment: nobody may stay selected */
+        if (m->result.status != LSS_OK)
+                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         PT_END(&s->pc);
 }

@@ -45,6 +45,20 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                         s->value[s->sub] = lss_identity_field(&s->known.value, s->sub);
                                 } else {
                                         s->value[s->sub] = known_prefix(&s->known, s->sub);
+                                        if (s->known.known_bits[s->sub] > 0) {
+                                                /* does anybody have the known top bits at all? */
+                                                STEP_REQUEST(m, &s->pc,
+                                                             lss_encode_fastscan(&f__, s->value[s->sub],
+                                                                                 (uint8_t) (32 - s->known.known_bits[s->sub]),
+                                                                                 (uint8_t) s->sub, (uint8_t) s->sub),
+                                                             LSS_CS_IDENTIFY_SLAVE);
+                                                if (!step_answered(m) && s->field_try >= m->timing.cfg.retries) {
+                                                        s->none = true;
+                                                        goto out;
+                                                }
+                                                if (!step_answered(m))
+                                                        continue;
+                                        }
                                         for (s->bit = 31 - s->known.known_bits[s->sub]; s->bit >= 0; s->bit--) {
                                                 STEP_REQUEST(m, &s->pc,
                                                              lss_encode_fastscan(&f__, s->value[s->sub],
@@ -65,6 +79,13 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 /* Nobody matched, so the slaves still expect this
                                  * field: scan it again without a new ping. */
                                 m->stats.retries++;
+                                if (s->known.known_bits[s->sub] >= 32 && s->sub >= s->confirmed &&
+                                    s->field_try >= m->timing.cfg.retries) {
+                                        /* a known value nobody confirms: no such slave
+                                         * (others answered the ping) */
+                                        s->none = true;
+                                        goto out;
+                                }
                                 if (s->field_try >= m->timing.cfg.retries || s->sub < s->confirmed)
                                         break;
                         }
@@ -78,5 +99,6 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                 /* keep what was confirmed, unless a kept field just failed */
                 s->confirmed = s->sub < s->confirmed ? 0 : s->sub;
         }
+out:;
         PT_END(&s->pc);
 }

@@ -23,6 +23,7 @@ enum step_kind {
         STEP_LSS,    /* LSS request(s), answered by expect_cs or unconfirmed */
         STEP_BOOTUP, /* wait for the boot-up of a node (optionally after sending tx) */
         STEP_DELAY,  /* send tx (if any) and stay silent for wait_us */
+        STEP_SDO,    /* SDO upload request to node bootup_node: does anyone answer? */
 };
 
 enum step_phase { PHASE_IDLE, PHASE_WAIT, PHASE_ANSWER_GUARD, PHASE_LATE_GUARD, PHASE_DONE };
@@ -59,13 +60,14 @@ typedef struct lss_assign_state {
         uint8_t node_id, old;
         unsigned flags, attempt, field;
         bool selected;
+        const bool *taken;      /* node-IDs known to be taken (128 entries), or NULL */
         lss_fastscan_state fs;
 } lss_assign_state;
 
 typedef struct lss_range_item { uint32_t rlo, rhi, slo, shi; } lss_range_item;
 
 typedef struct lss_scan_state {
-        int vpc;
+        int pc, vpc;
         lss_fastscan_known known;
         lss_identify_range range;
         lss_fastscan_state fs;
@@ -100,6 +102,7 @@ struct lss_master {
         lss_fastscan_state fs;
         lss_assign_state as;
         lss_scan_state sc;
+        struct lss_aa_state *aa;
 
         lss_frame txq[16];
         unsigned txq_head, txq_len;
@@ -136,5 +139,8 @@ void master_progress(lss_master *m, double p);
 int proc_fastscan(lss_master *m, lss_fastscan_state *s);
 int proc_assign(lss_master *m, lss_assign_state *s);
 int proc_fastscan_assign(lss_master *m, lss_assign_state *s);
-int proc_enumerate(lss_master *m);
-int proc_slowscan(lss_master *m);
+int proc_enumerate(lss_master *m, lss_scan_state *s);
+int proc_slowscan(lss_master *m, lss_scan_state *s);
+int proc_autoassign(lss_master *m);
+void lss_autoassign_free_state(lss_master *m);
+int master_start_procedure(lss_master *m, lss_proc_fn proc, uint64_t now);

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "lss/lss_internal.h"
+#include "lss/lss_autoassign.h"
 
 const char *lss_status_name(enum lss_status s) {
         static const char *const names[] = {
@@ -44,6 +45,7 @@ void lss_master_free(lss_master *m) {
         free(m->devices);
         free(m->sc.stack);
         free(m->sc.cand);
+        lss_autoassign_free_state(m);
         free(m);
 }
 
@@ -140,6 +142,10 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
         m->step.phase = PHASE_IDLE;
         advance(m);
         return 0;
+}
+
+int master_start_procedure(lss_master *m, lss_proc_fn proc, uint64_t now) {
+        return start_op(m, proc, true, now);
 }
 
 /* ---- raw services ---- */
@@ -303,6 +309,18 @@ static int proc_fastscan_top(lss_master *m) {
         PT_END(&m->pc);
 }
 
+static int proc_enumerate_top(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        PT_CALL(&m->pc, proc_enumerate(m, &m->sc));
+        PT_END(&m->pc);
+}
+
+static int proc_slowscan_top(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        PT_CALL(&m->pc, proc_slowscan(m, &m->sc));
+        PT_END(&m->pc);
+}
+
 static int proc_assign_top(lss_master *m) {
         PT_BEGIN(&m->pc);
         PT_CALL(&m->pc, proc_assign(m, &m->as));
@@ -436,8 +454,8 @@ int lss_master_enumerate(lss_master *m, const lss_fastscan_known *known, uint64_
                 return -EBUSY;
         memset(&m->sc.known, 0, sizeof(m->sc.known));
         set_known(&m->sc.known, known);
-        m->sc.vpc = 0;
-        return start_op(m, proc_enumerate, true, now);
+        m->sc.pc = m->sc.vpc = 0;
+        return start_op(m, proc_enumerate_top, true, now);
 }
 
 int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now) {
@@ -446,8 +464,8 @@ int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now
         if (m->running)
                 return -EBUSY;
         m->sc.range = *r;
-        m->sc.vpc = 0;
-        return start_op(m, proc_slowscan, true, now);
+        m->sc.pc = m->sc.vpc = 0;
+        return start_op(m, proc_slowscan_top, true, now);
 }
 
 int lss_master_assign(lss_master *m, const lss_identity *id, uint8_t node_id, unsigned flags, uint64_t now) {

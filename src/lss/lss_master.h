@@ -81,6 +81,7 @@ typedef struct lss_result {
         uint32_t value;      /* inquire */
         uint8_t node_id;     /* inquire node-ID; assign: old node-ID */
         bool changed;        /* assign: something was configured */
+        bool in_use;         /* assign: the node-ID already answers on the bus */
         lss_identity id;     /* fastscan, inquire identity */
         lss_device *devices; /* scans: every slave found (owned by the engine until next start) */
         size_t n_devices;
@@ -131,6 +132,9 @@ int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now
 enum lss_assign_flags {
         LSS_ASSIGN_STORE = 1u << 0,  /* Store Configuration after configuring */
         LSS_ASSIGN_VERIFY = 1u << 1, /* wait for the boot-up at the new node-ID */
+        /* first ask the bus whether a device already answers to the node-ID
+         * (SDO upload of 0x1000); if one does: LSS_E_CONFLICT, result.in_use */
+        LSS_ASSIGN_CHECK_FREE = 1u << 2,
 };
 /* Give the slave with this identity a node-ID: selective switch, inquire the
  * node-ID (nothing is sent if it already has it), configure, store, back to

@@ -79,16 +79,15 @@ static int verify_candidates(lss_master *m, lss_scan_state *s) {
         PT_END(&s->vpc);
 }
 
-int proc_enumerate(lss_master *m) {
-        lss_scan_state *s = &m->sc;
-        PT_BEGIN(&m->pc);
+int proc_enumerate(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->pc);
         for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
                 s->n_cand = 0;
                 s->failed_scans = 0;
                 m->n_devices = 0;
                 for (;;) {
                         s->fs = (lss_fastscan_state) { .known = s->known };
-                        PT_CALL(&m->pc, proc_fastscan(m, &s->fs));
+                        PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
                         if (s->fs.none)
                                 break;
                         if (!s->fs.found) {
@@ -111,16 +110,16 @@ int proc_enumerate(lss_master *m) {
                         }
                         master_progress(m, 0.9 * (1.0 - 1.0 / (1.0 + (double) s->n_cand)));
                 }
-                STEP_REQUEST(m, &m->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
+                STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
                 s->vpc = 0;
-                PT_CALL(&m->pc, verify_candidates(m, s));
+                PT_CALL(&s->pc, verify_candidates(m, s));
                 if (m->result.status != LSS_OK || s->dropped == 0)
                         goto out;
                 m->stats.retries++;
         }
         master_fail(m, LSS_E_INCOMPLETE, "%u slaves found by fastscan could not be verified", s->dropped);
 out:;
-        PT_END(&m->pc);
+        PT_END(&s->pc);
 }
 
 static void split(lss_scan_state *s, uint32_t rlo, uint32_t rhi, uint32_t slo, uint32_t shi) {
@@ -136,9 +135,8 @@ static void split(lss_scan_state *s, uint32_t rlo, uint32_t rhi, uint32_t slo, u
         }
 }
 
-int proc_slowscan(lss_master *m) {
-        lss_scan_state *s = &m->sc;
-        PT_BEGIN(&m->pc);
+int proc_slowscan(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->pc);
         s->n_cand = s->n_stack = 0;
         m->n_devices = 0;
         if (stack_push(s, s->range.rev_lo, s->range.rev_hi, s->range.serial_lo, s->range.serial_hi) < 0) {
@@ -161,7 +159,7 @@ int proc_slowscan(lss_master *m) {
                         }
                 }
                 step_start(m);
-                PT_YIELD(&m->pc);
+                PT_YIELD(&s->pc);
                 if (!step_answered(m))
                         continue;
                 if (s->cur.rlo == s->cur.rhi && s->cur.slo == s->cur.shi) {
@@ -175,10 +173,10 @@ int proc_slowscan(lss_master *m) {
                 split(s, s->cur.rlo, s->cur.rhi, s->cur.slo, s->cur.shi);
         }
         s->vpc = 0;
-        PT_CALL(&m->pc, verify_candidates(m, s));
+        PT_CALL(&s->pc, verify_candidates(m, s));
         if (m->result.status == LSS_OK && s->dropped > 0)
                 master_fail(m, LSS_E_INCOMPLETE, "%u slaves answered identify but not the selective switch",
                             s->dropped);
 out:;
-        PT_END(&m->pc);
+        PT_END(&s->pc);
 }

@@ -45,6 +45,8 @@ static bool step_matches(const lss_step *s, const lss_frame *f) {
                 uint8_t node, state;
                 return bootup_decode(f, &node, &state) && node == s->bootup_node && state == 0;
         }
+        if (s->kind == STEP_SDO)
+                return f->id == 0x580u + s->bootup_node && f->len == 8 && f->flags == 0;
         return s->kind == STEP_LSS && lss_is_response(f) && f->data[0] == (uint8_t) s->expect_cs;
 }
 
@@ -99,7 +101,7 @@ uint64_t step_deadline(const lss_master *m) {
 
         switch (s->phase) {
         case PHASE_WAIT:
-                if (s->kind == STEP_LSS)
+                if (s->kind == STEP_LSS || s->kind == STEP_SDO)
                         return s->sent_at + s->tx_us + lss_timing_wait(&m->timing, s->discovery);
                 return s->sent_at + s->tx_us + s->wait_us;
         case PHASE_ANSWER_GUARD:
@@ -118,7 +120,7 @@ void step_on_time(lss_master *m, uint64_t now) {
                 return;
         switch (s->phase) {
         case PHASE_WAIT:
-                if (s->kind != STEP_LSS) {
+                if (s->kind != STEP_LSS && s->kind != STEP_SDO) {
                         s->phase = PHASE_DONE;
                         return;
                 }

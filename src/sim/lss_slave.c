@@ -402,6 +402,29 @@ void lss_slave_power_on(lss_slave *s, uint64_t now_us) {
         note_change(s, &before);
 }
 
+/* The bit of an SDO server every CANopen device has: an expedited upload of
+ * object 0x1000 (device type) answers; anything else is aborted. The master
+ * uses it to learn whether a node-ID is taken. No SDO in NMT Stopped. */
+static void sdo_request(lss_slave *s, const lss_frame *f) {
+        if (s->st.nmt == SLAVE_NMT_STOPPED || !s->emit)
+                return;
+        lss_frame a = { .id = 0x580u + s->st.active_node_id, .len = 8 };
+        memcpy(a.data + 1, f->data + 1, 3); /* index, sub-index */
+        if (f->data[0] == 0x40 && f->data[1] == 0x00 && f->data[2] == 0x10 && f->data[3] == 0x00) {
+                a.data[0] = 0x43;
+                lss_put_u32(a.data + 4, 0x00000192u); /* device profile 402 */
+        } else {
+                a.data[0] = 0x80;
+                lss_put_u32(a.data + 4, f->data[0] == 0x40 ? 0x06020000u : 0x05040001u);
+        }
+        s->emit(s->userdata, &a, tx_delay(s));
+}
+
+static bool is_sdo_request(const lss_slave *s, const lss_frame *f) {
+        return f->flags == 0 && f->len == 8 && lss_node_id_valid(s->st.active_node_id) &&
+                f->id == 0x600u + s->st.active_node_id;
+}
+
 void lss_slave_on_frame(lss_slave *s, const lss_frame *f, uint64_t now_us) {
         lss_slave_state before = s->st;
         uint8_t cs, node;
@@ -414,6 +437,8 @@ void lss_slave_on_frame(lss_slave *s, const lss_frame *f, uint64_t now_us) {
                         lss_request(s, f);
                 else if (nmt_decode(f, &cs, &node))
                         nmt_command(s, cs, node);
+                else if (is_sdo_request(s, f))
+                        sdo_request(s, f);
         }
         note_change(s, &before);
 }

@@ -67,7 +67,8 @@ START_TEST(fastscan_known_fields) {
         r = run(m, b);
         ck_assert_int_eq(r->status, LSS_OK);
         ck_assert(lss_identity_equal(&r->id, &id));
-        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 1 + 3 + 16 + 1);
+        /* ping, 3 known confirms, a check that somebody has the known top bits, 16 bits, confirm */
+        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 1 + 3 + 1 + 16 + 1);
         k.known_bits[0] = 33;
         ck_assert_int_eq(lss_master_fastscan(m, &k, membus_now(b)), -EINVAL);
         lss_master_free(m);
@@ -75,16 +76,24 @@ START_TEST(fastscan_known_fields) {
 }
 END_TEST
 
-/* A wrong known value: nobody confirms it; a clear outcome, no identity. */
+/* A known value nobody has: "nobody there", even though the ping was answered. */
 START_TEST(fastscan_wrong_known_value) {
         membus *b = bus_random(2, 13, 0xEC, 0x1234, NULL);
         lss_master *m = master_default();
         lss_fastscan_known k = known_vp(0xED, 0x1234);
         ck_assert_int_eq(lss_master_fastscan(m, &k, membus_now(b)), 0);
         const lss_result *r = run(m, b);
-        ck_assert_int_eq(r->status, LSS_E_INCOMPLETE);
+        ck_assert_int_eq(r->status, LSS_E_NOT_FOUND);
         ck_assert(!r->found);
         ck_assert(all_waiting(b));
+        /* the same for known top bits nobody has */
+        k = known_vp(0xEC, 0x1234);
+        k.value.serial = 0xFFFF0000u;
+        k.known_bits[LSS_FIELD_SERIAL] = 16;
+        for (size_t i = 0; i < 2; i++)
+                membus_slave(b, i)->id.serial &= 0x0000FFFFu;
+        ck_assert_int_eq(lss_master_fastscan(m, &k, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NOT_FOUND);
         lss_master_free(m);
         membus_free(b);
 }

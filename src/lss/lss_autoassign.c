@@ -1,0 +1,336 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The auto-assignment pass (the plan is in lss_autoassign.h). Built from the
+ * engine's own procedures: assignment by selective switch, slowscan,
+ * enumeration. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lss/lss_autoassign.h"
+#include "lss/lss_internal.h"
+
+typedef struct lss_aa_state {
+        int pc, i_pc;
+        const lss_autoassign_plan *plan;
+        bool *handled;          /* per map entry: seen on the bus */
+        bool used[128];         /* node-IDs known to be taken */
+        lss_device *todo;       /* devices found by a scan, still to handle */
+        size_t n_todo, cap_todo, t, i;
+        uint32_t vp[2];         /* vendor/product pair being enumerated */
+        size_t pair;
+        int entry;              /* map entry of the device being handled, -1 none */
+        bool changed;
+        uint8_t target;
+        bool taken[128];        /* answered an SDO probe before NMT Stop silenced them */
+        lss_outcome *out;
+        size_t n_out, cap_out;
+} lss_aa_state;
+
+const char *lss_outcome_name(enum lss_outcome_kind k) {
+        static const char *const names[] = {
+                [LSS_OUTCOME_UNCHANGED] = "unchanged", [LSS_OUTCOME_ASSIGNED] = "assigned",
+                [LSS_OUTCOME_POOL] = "pool",           [LSS_OUTCOME_UNKNOWN] = "unknown",
+                [LSS_OUTCOME_MISSING] = "missing",     [LSS_OUTCOME_CONFLICT] = "conflict",
+                [LSS_OUTCOME_FAILED] = "failed",
+        };
+        return (unsigned) k < sizeof(names) / sizeof(names[0]) ? names[k] : "unknown";
+}
+
+void lss_autoassign_free_state(lss_master *m) {
+        if (!m->aa)
+                return;
+        free(m->aa->handled);
+        free(m->aa->todo);
+        free(m->aa->out);
+        free(m->aa);
+        m->aa = NULL;
+}
+
+static lss_outcome *outcome_add(lss_aa_state *s, const lss_identity *id) {
+        for (size_t i = 0; i < s->n_out; i++)
+                if (lss_identity_equal(&s->out[i].id, id))
+                        return &s->out[i]; /* found twice (e.g. by two scans): one outcome */
+        if (s->n_out == s->cap_out) {
+                size_t cap = s->cap_out ? s->cap_out * 2 : 16;
+                lss_outcome *o = realloc(s->out, cap * sizeof(*o));
+                if (!o)
+                        return NULL;
+                s->out = o;
+                s->cap_out = cap;
+        }
+        lss_outcome *o = &s->out[s->n_out++];
+        memset(o, 0, sizeof(*o));
+        o->id = *id;
+        return o;
+}
+
+static bool already_handled(const lss_aa_state *s, const lss_identity *id) {
+        for (size_t i = 0; i < s->n_out; i++)
+                if (lss_identity_equal(&s->out[i].id, id) && s->out[i].kind != LSS_OUTCOME_MISSING)
+                        return true;
+        return false;
+}
+
+static int lookup(const lss_autoassign_plan *p, const lss_identity *id) {
+        for (size_t i = 0; i < p->n_map; i++) {
+                const lss_map_entry *e = &p->map[i];
+                if (e->id.vendor == id->vendor && e->id.product == id->product && e->id.serial == id->serial &&
+                    (!e->revision_known || e->id.revision == id->revision))
+                        return (int) i;
+        }
+        return -1;
+}
+
+static int todo_take(lss_aa_state *s, const lss_device *d, size_t n) {
+        s->n_todo = 0;
+        if (n > s->cap_todo) {
+                lss_device *t = realloc(s->todo, n * sizeof(*t));
+                if (!t)
+                        return -ENOMEM;
+                s->todo = t;
+                s->cap_todo = n;
+        }
+        if (n)
+                memcpy(s->todo, d, n * sizeof(*d));
+        s->n_todo = n;
+        return 0;
+}
+
+/* Lowest pool node-ID not given by the map and not seen taken. */
+static uint8_t pool_next(const lss_aa_state *s) {
+        for (unsigned id = s->plan->pool_lo; id <= s->plan->pool_hi && id <= LSS_NODE_ID_MAX; id++)
+                if (!s->used[id])
+                        return (uint8_t) id;
+        return 0;
+}
+
+/* Turn the result of an assignment into the device's outcome. */
+static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool pool) {
+        const lss_result *r = &m->result;
+        lss_outcome *o = outcome_add(s, id);
+        if (!o)
+                return;
+        o->old_node_id = r->node_id;
+        o->status = r->status;
+        snprintf(o->message, sizeof(o->message), "%s", r->message);
+        if (r->status == LSS_OK) {
+                o->kind = !r->changed ? LSS_OUTCOME_UNCHANGED : pool ? LSS_OUTCOME_POOL : LSS_OUTCOME_ASSIGNED;
+                o->new_node_id = s->target;
+                s->used[s->target] = true;
+        } else if (r->status == LSS_E_NOT_FOUND) {
+                o->kind = LSS_OUTCOME_MISSING;
+                o->old_node_id = o->new_node_id = 0;
+        } else {
+                o->kind = r->status == LSS_E_CONFLICT ? LSS_OUTCOME_CONFLICT : LSS_OUTCOME_FAILED;
+                o->new_node_id = r->node_id;
+                if (r->in_use)
+                        s->used[s->target] = true;
+        }
+        if (lss_node_id_valid(r->node_id))
+                s->used[r->node_id] = true;
+        /* the pass goes on: one device's trouble is its own outcome */
+        m->result.status = LSS_OK;
+        m->result.message[0] = 0;
+        m->result.in_use = false;
+}
+
+static unsigned assign_flags(const lss_aa_state *s) {
+        return LSS_ASSIGN_VERIFY | LSS_ASSIGN_CHECK_FREE | (s->plan->store ? LSS_ASSIGN_STORE : 0);
+}
+
+/* Handle the devices in `todo` (full identities, found by a scan). */
+static int handle_found(lss_master *m, lss_aa_state *s) {
+        PT_BEGIN(&s->i_pc);
+        for (s->t = 0; s->t < s->n_todo; s->t++) {
+                if (already_handled(s, &s->todo[s->t].id))
+                        continue;
+                s->entry = lookup(s->plan, &s->todo[s->t].id);
+                if (s->entry >= 0) {
+                        s->handled[s->entry] = true;
+                        s->target = s->plan->map[s->entry].node_id;
+                } else if (s->plan->unknown == LSS_UNKNOWN_POOL && s->todo[s->t].node_id == LSS_NODE_ID_UNCONFIGURED) {
+                        s->target = pool_next(s);
+                        if (s->target == 0) {
+                                lss_outcome *o = outcome_add(s, &s->todo[s->t].id);
+                                if (o) {
+                                        o->kind = LSS_OUTCOME_FAILED;
+                                        o->status = LSS_E_INVALID;
+                                        o->old_node_id = o->new_node_id = s->todo[s->t].node_id;
+                                        snprintf(o->message, sizeof(o->message), "the pool is exhausted");
+                                }
+                                continue;
+                        }
+                } else {
+                        lss_outcome *o = outcome_add(s, &s->todo[s->t].id);
+                        if (o) {
+                                o->kind = LSS_OUTCOME_UNKNOWN;
+                                o->old_node_id = o->new_node_id = s->todo[s->t].node_id;
+                        }
+                        continue;
+                }
+                for (;;) {
+                        memset(&m->as, 0, sizeof(m->as));
+                        m->as.id = s->todo[s->t].id;
+                        m->as.node_id = s->target;
+                        m->as.flags = assign_flags(s);
+                        m->as.taken = s->plan->nmt_stop ? s->taken : NULL;
+                        PT_CALL(&s->i_pc, proc_assign(m, &m->as));
+                        /* a pool ID somebody already answers to: take the next one */
+                        if (s->entry < 0 && m->result.in_use) {
+                                s->used[s->target] = true;
+                                m->result.status = LSS_OK;
+                                m->result.in_use = false;
+                                s->target = pool_next(s);
+                                if (s->target != 0)
+                                        continue;
+                                master_fail(m, LSS_E_CONFLICT, "every node-ID of the pool answers on the bus");
+                        }
+                        break;
+                }
+                s->changed = m->result.changed;
+                record(m, s, &s->todo[s->t].id, s->entry < 0);
+                if (s->changed && s->plan->nmt_stop) {
+                        /* the verifying reset took them out of Stopped */
+                        STEP_REQUEST(m, &s->i_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
+                }
+        }
+        PT_END(&s->i_pc);
+}
+
+int proc_autoassign(lss_master *m) {
+        lss_aa_state *s = m->aa;
+        PT_BEGIN(&s->pc);
+        for (size_t i = 0; i < s->plan->n_map; i++)
+                s->used[s->plan->map[i].node_id] = true;
+
+        if (s->plan->nmt_stop) {
+                /* Stopped devices do not answer SDO: learn which mapped
+                 * node-IDs are taken while they still can. */
+                for (s->i = 0; s->i < s->plan->n_map; s->i++) {
+                        s->target = s->plan->map[s->i].node_id;
+                        if (s->taken[s->target])
+                                continue;
+                        m->step = (lss_step) { .kind = STEP_SDO, .bootup_node = s->target, .discovery = true };
+                        {
+                                lss_frame f = { .id = 0x600u + s->target, .len = 8, .data = { 0x40, 0x00, 0x10 } };
+                                step_add_tx(m, &f);
+                        }
+                        step_start(m);
+                        PT_YIELD(&s->pc);
+                        s->taken[s->target] = m->step.n_answers > 0;
+                }
+                STEP_REQUEST(m, &s->pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
+                /* give the devices time to act on it before LSS starts */
+                m->step = (lss_step) { .kind = STEP_DELAY, .wait_us = 20000 };
+                step_start(m);
+                PT_YIELD(&s->pc);
+        }
+
+        /* 1. full identities: straight to them by selective switch */
+        for (s->i = 0; s->i < s->plan->n_map; s->i++) {
+                if (!s->plan->map[s->i].revision_known)
+                        continue;
+                s->target = s->plan->map[s->i].node_id;
+                memset(&m->as, 0, sizeof(m->as));
+                m->as.id = s->plan->map[s->i].id;
+                m->as.node_id = s->target;
+                m->as.flags = assign_flags(s);
+                m->as.taken = s->plan->nmt_stop ? s->taken : NULL;
+                PT_CALL(&s->pc, proc_assign(m, &m->as));
+                if (m->result.status != LSS_E_NOT_FOUND) {
+                        s->handled[s->i] = true;
+                        s->changed = m->result.changed;
+                        record(m, s, &s->plan->map[s->i].id, false);
+                        if (s->changed && s->plan->nmt_stop) {
+                                /* the verifying reset took them out of Stopped */
+                                STEP_REQUEST(m, &s->pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
+                        }
+                } else
+                        m->result.status = LSS_OK;
+        }
+
+        /* 2. no revision in the map: bisect the revision for that serial */
+        for (s->i = 0; s->i < s->plan->n_map; s->i++) {
+                if (s->plan->map[s->i].revision_known || s->handled[s->i])
+                        continue;
+                m->sc.range = (lss_identify_range) { s->plan->map[s->i].id.vendor, s->plan->map[s->i].id.product, 0,
+                                                     UINT32_MAX, s->plan->map[s->i].id.serial,
+                                                     s->plan->map[s->i].id.serial };
+                m->sc.pc = m->sc.vpc = 0;
+                PT_CALL(&s->pc, proc_slowscan(m, &m->sc));
+                m->result.status = LSS_OK;
+                if (todo_take(s, m->devices, m->n_devices) < 0)
+                        continue;
+                s->i_pc = 0;
+                PT_CALL(&s->pc, handle_found(m, s));
+        }
+
+        /* 3. non-configured devices left: fastscan with the map's vendor and
+         * product bits first, then blind while somebody still answers */
+        for (s->pair = 0; s->pair <= s->plan->n_map; s->pair++) {
+                memset(&m->sc.known, 0, sizeof(m->sc.known));
+                if (s->pair < s->plan->n_map) {
+                        const lss_identity *id = &s->plan->map[s->pair].id;
+                        bool seen = false;
+                        for (size_t j = 0; j < s->pair; j++)
+                                seen |= s->plan->map[j].id.vendor == id->vendor &&
+                                        s->plan->map[j].id.product == id->product;
+                        if (seen)
+                                continue;
+                        m->sc.known.value = *id;
+                        m->sc.known.known_bits[LSS_FIELD_VENDOR] = 32;
+                        m->sc.known.known_bits[LSS_FIELD_PRODUCT] = 32;
+                }
+                m->sc.pc = m->sc.vpc = 0;
+                PT_CALL(&s->pc, proc_enumerate(m, &m->sc));
+                m->result.status = LSS_OK;
+                if (todo_take(s, m->devices, m->n_devices) < 0)
+                        continue;
+                s->i_pc = 0;
+                PT_CALL(&s->pc, handle_found(m, s));
+        }
+
+        /* 4. what the map has and the bus has not */
+        for (size_t i = 0; i < s->plan->n_map; i++)
+                if (!s->handled[i]) {
+                        lss_outcome *o = outcome_add(s, &s->plan->map[i].id);
+                        if (o) {
+                                o->kind = LSS_OUTCOME_MISSING;
+                                o->status = LSS_E_NOT_FOUND;
+                        }
+                }
+        STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
+        m->result.status = LSS_OK;
+        m->n_devices = 0; /* the outcomes are the result */
+        PT_END(&s->pc);
+}
+
+int lss_master_autoassign(lss_master *m, const lss_autoassign_plan *plan, uint64_t now) {
+        if (!plan || (plan->n_map && !plan->map))
+                return -EINVAL;
+        for (size_t i = 0; i < plan->n_map; i++)
+                if (!lss_node_id_valid(plan->map[i].node_id))
+                        return -EINVAL;
+        if (plan->unknown == LSS_UNKNOWN_POOL &&
+            (!lss_node_id_valid(plan->pool_lo) || !lss_node_id_valid(plan->pool_hi) || plan->pool_lo > plan->pool_hi))
+                return -EINVAL;
+        if (lss_master_busy(m))
+                return -EBUSY;
+        lss_autoassign_free_state(m);
+        m->aa = calloc(1, sizeof(*m->aa));
+        if (!m->aa)
+                return -ENOMEM;
+        m->aa->plan = plan;
+        m->aa->handled = calloc(plan->n_map + 1, sizeof(bool));
+        if (!m->aa->handled) {
+                lss_autoassign_free_state(m);
+                return -ENOMEM;
+        }
+        return master_start_procedure(m, proc_autoassign, now);
+}
+
+const lss_outcome *lss_master_outcomes(const lss_master *m, size_t *n) {
+        *n = m->aa ? m->aa->n_out : 0;
+        return m->aa ? m->aa->out : NULL;
+}

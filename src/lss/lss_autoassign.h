@@ -1,0 +1,68 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Auto-assignment: make the bus match a node-ID map keyed by LSS identity.
+ *
+ *  1. NMT Stop to all first when asked (devices that take LSS only when stopped).
+ *  2. Map entries with a full identity: selective switch (no scan), Inquire
+ *     Node-ID; nothing is sent when it already matches (idempotent).
+ *  3. Map entries without revision: identify-remote bisection over the
+ *     revision for that vendor/product/serial (finds configured ones too).
+ *  4. Non-configured devices left: enumeration by fastscan, with the known
+ *     vendor/product bits of the map first, then blind when a ping still
+ *     gets an answer; each is then handled by selective switch.
+ *  5. Before a node-ID is given, the bus is asked whether some device
+ *     already answers to it (SDO upload of object 0x1000 to that node, which
+ *     every CANopen device must answer); if one does, the device is reported
+ *     as a conflict and nothing is configured.
+ *  6. Every assignment is verified by the boot-up of the new node-ID (NMT
+ *     Reset Communication first for a device that was configured).
+ * Every slave ends in waiting state, whatever happens. */
+#pragma once
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "lss/lss_master.h"
+
+typedef struct lss_map_entry {
+        lss_identity id;
+        bool revision_known; /* false: any revision */
+        uint8_t node_id;
+} lss_map_entry;
+
+enum lss_unknown_policy { LSS_UNKNOWN_IGNORE = 0, LSS_UNKNOWN_POOL };
+
+typedef struct lss_autoassign_plan {
+        const lss_map_entry *map;
+        size_t n_map;
+        enum lss_unknown_policy unknown;
+        uint8_t pool_lo, pool_hi; /* for LSS_UNKNOWN_POOL */
+        bool store;
+        bool nmt_stop;
+} lss_autoassign_plan;
+
+enum lss_outcome_kind {
+        LSS_OUTCOME_UNCHANGED = 0, /* already had its mapped node-ID: nothing sent */
+        LSS_OUTCOME_ASSIGNED,      /* got its mapped node-ID, verified by boot-up */
+        LSS_OUTCOME_POOL,          /* not in the map, got a node-ID from the pool */
+        LSS_OUTCOME_UNKNOWN,       /* not in the map, left alone */
+        LSS_OUTCOME_MISSING,       /* in the map, not on the bus */
+        LSS_OUTCOME_CONFLICT,      /* its node-ID already answers on the bus: not assigned */
+        LSS_OUTCOME_FAILED,        /* an LSS error (status, message) */
+};
+
+const char *lss_outcome_name(enum lss_outcome_kind k);
+
+typedef struct lss_outcome {
+        lss_identity id;
+        uint8_t old_node_id; /* 0xFF non-configured, 0 unknown (missing) */
+        uint8_t new_node_id; /* what it has now (0 if missing) */
+        enum lss_outcome_kind kind;
+        enum lss_status status;
+        char message[160];
+} lss_outcome;
+
+/* Starts the pass. The plan (and its map) must stay valid until it is done. */
+int lss_master_autoassign(lss_master *m, const lss_autoassign_plan *plan, uint64_t now);
+/* The per-device outcomes of the last pass (valid until the next start). */
+const lss_outcome *lss_master_outcomes(const lss_master *m, size_t *n);

@@ -1,0 +1,36 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Helpers for the daemon unit tests: sd-bus messages without a bus daemon. */
+#pragma once
+
+#include <check.h>
+#include <sys/socket.h>
+#include <systemd/sd-bus.h>
+#include <unistd.h>
+
+/* An sd_bus on one end of a socketpair: enough to build and read messages. */
+static inline sd_bus *test_bus_new(void) {
+        sd_bus *bus = NULL;
+        int sp[2];
+        ck_assert_int_eq(socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sp), 0);
+        ck_assert_int_ge(sd_bus_new(&bus), 0);
+        ck_assert_int_ge(sd_bus_set_fd(bus, sp[0], sp[0]), 0);
+        ck_assert_int_ge(sd_bus_start(bus), 0);
+        close(sp[1]);
+        return bus;
+}
+
+static inline void test_bus_free(sd_bus *bus) {
+        sd_bus_close_unref(bus);
+}
+
+/* A method call with `types`/args appended, sealed and rewound for reading. */
+#define test_message(bus, m, types, ...)                                                                         \
+        do {                                                                                                     \
+                ck_assert_int_ge(sd_bus_message_new_method_call((bus), &(m), "org.lssd.LSS1",                    \
+                                                                "/org/lssd/LSS1/buses/can0", "org.lssd.LSS1.Bus", \
+                                                                "Test"),                                         \
+                                 0);                                                                             \
+                ck_assert_int_ge(sd_bus_message_append((m), (types), __VA_ARGS__), 0);                          \
+                ck_assert_int_ge(sd_bus_message_seal((m), 1, 0), 0);                                             \
+                ck_assert_int_ge(sd_bus_message_rewind((m), 1), 0);                                              \
+        } while (0)

@@ -1,0 +1,208 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Auto-assignment from a node-ID map on the in-memory bus. */
+#include "engine-util.h"
+#include "lss/lss_autoassign.h"
+
+typedef struct frame_count {
+        unsigned configure, store, sdo;
+} frame_count;
+
+static void count(void *ud, const lss_frame *f, uint64_t t) {
+        frame_count *c = ud;
+        if (lss_is_request(f)) {
+                c->configure += f->data[0] == LSS_CS_CONFIGURE_NODE_ID;
+                c->store += f->data[0] == LSS_CS_STORE;
+        }
+        c->sdo += f->id >= 0x601 && f->id <= 0x67F;
+}
+
+static const lss_outcome *outcome_of(lss_master *m, const lss_identity *id) {
+        size_t n;
+        const lss_outcome *o = lss_master_outcomes(m, &n);
+        for (size_t i = 0; i < n; i++)
+                if (lss_identity_equal(&o[i].id, id))
+                        return &o[i];
+        return NULL;
+}
+
+static const lss_result *run_pass(lss_master *m, membus *b, const lss_autoassign_plan *p) {
+        ck_assert_int_eq(lss_master_autoassign(m, p, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        lss_drive_idle(b, 100000);
+        return r;
+}
+
+/* The encoder manual: several encoders shipped at node-ID 1, LSS only when
+ * NMT Stopped, mapped by serial number (vendor/product from the bus). */
+START_TEST(encoders_at_node_1) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(1000, 300);
+        f.needs_nmt_stopped = true;
+        lss_map_entry map[6];
+        for (unsigned i = 0; i < 6; i++) {
+                lss_identity id = { 0xEC, 0x1234, 0x00010002, 0x1000 + i * 7 };
+                membus_add_slave(b, &id, 1, &f);
+                map[i] = (lss_map_entry) { .id = id, .revision_known = false, .node_id = (uint8_t) (10 + i) };
+        }
+        lss_autoassign_plan p = { .map = map, .n_map = 6, .store = true, .nmt_stop = true };
+        lss_master *m = master_default();
+        const lss_result *r = run_pass(m, b, &p);
+        ck_assert_int_eq(r->status, LSS_OK);
+        for (unsigned i = 0; i < 6; i++) {
+                const lss_outcome *o = outcome_of(m, &membus_slave(b, i)->id);
+                ck_assert_ptr_nonnull(o);
+                ck_assert_msg(o->kind == LSS_OUTCOME_ASSIGNED, "encoder %u: %s %s", i, lss_outcome_name(o->kind),
+                              o->message);
+                ck_assert_uint_eq(o->old_node_id, 1);
+                ck_assert_uint_eq(membus_slave(b, i)->st.active_node_id, 10 + i);
+                ck_assert_uint_eq(membus_slave(b, i)->st.stored_node_id, 10 + i);
+        }
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+static const lss_identity A = { 0x9A, 3, 1, 17 };    /* mapped, non-configured, full identity */
+static const lss_identity B = { 0x9A, 3, 2, 18 };    /* mapped (no revision), configured wrong */
+static const lss_identity C = { 0x9A, 3, 1, 19 };    /* mapped, already right */
+static const lss_identity U = { 0x77, 5, 1, 99 };    /* not in the map, non-configured */
+static const lss_identity D = { 0x9A, 3, 1, 20 };    /* mapped, absent */
+static const lss_identity E = { 0x9A, 3, 1, 21 };    /* mapped to 9, which X already has */
+static const lss_identity X = { 0x55, 1, 1, 1 };     /* not in the map, configured at 9 */
+
+static membus *mixed_bus(void) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(800, 400);
+        membus_add_slave(b, &A, 0xFF, &f);
+        membus_add_slave(b, &B, 40, &f);
+        membus_add_slave(b, &C, 6, &f);
+        membus_add_slave(b, &U, 0xFF, &f);
+        membus_add_slave(b, &E, 0xFF, &f);
+        membus_add_slave(b, &X, 9, &f);
+        return b;
+}
+
+static const lss_map_entry mixed_map[] = {
+        { .id = { 0x9A, 3, 1, 17 }, .revision_known = true, .node_id = 5 },
+        { .id = { 0x9A, 3, 0, 18 }, .revision_known = false, .node_id = 7 },
+        { .id = { 0x9A, 3, 1, 19 }, .revision_known = true, .node_id = 6 },
+        { .id = { 0x9A, 3, 1, 20 }, .revision_known = true, .node_id = 8 },
+        { .id = { 0x9A, 3, 1, 21 }, .revision_known = true, .node_id = 9 },
+};
+
+START_TEST(mixed_bus_ignore) {
+        membus *b = mixed_bus();
+        lss_autoassign_plan p = { .map = mixed_map, .n_map = 5, .store = true };
+        lss_master *m = master_default();
+        const lss_result *r = run_pass(m, b, &p);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_int_eq(outcome_of(m, &A)->kind, LSS_OUTCOME_ASSIGNED);
+        ck_assert_uint_eq(membus_find(b, &A)->st.active_node_id, 5);
+        ck_assert_int_eq(outcome_of(m, &B)->kind, LSS_OUTCOME_ASSIGNED);
+        ck_assert_uint_eq(outcome_of(m, &B)->old_node_id, 40);
+        ck_assert_uint_eq(membus_find(b, &B)->st.active_node_id, 7);
+        ck_assert_int_eq(outcome_of(m, &C)->kind, LSS_OUTCOME_UNCHANGED);
+        ck_assert_int_eq(outcome_of(m, &U)->kind, LSS_OUTCOME_UNKNOWN);
+        ck_assert_uint_eq(membus_find(b, &U)->st.active_node_id, 0xFF);
+        ck_assert_int_eq(outcome_of(m, &D)->kind, LSS_OUTCOME_MISSING);
+        ck_assert_int_eq(outcome_of(m, &E)->kind, LSS_OUTCOME_CONFLICT);
+        ck_assert_uint_eq(membus_find(b, &E)->st.active_node_id, 0xFF);
+        ck_assert_uint_eq(membus_find(b, &X)->st.active_node_id, 9);
+        ck_assert(all_waiting(b));
+
+        /* second pass: nothing to configure, nothing to store */
+        frame_count c = { 0 };
+        membus_set_trace(b, count, &c);
+        run_pass(m, b, &p);
+        ck_assert_uint_eq(c.configure, 0);
+        ck_assert_uint_eq(c.store, 0);
+        ck_assert_int_eq(outcome_of(m, &A)->kind, LSS_OUTCOME_UNCHANGED);
+        ck_assert_int_eq(outcome_of(m, &B)->kind, LSS_OUTCOME_UNCHANGED);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(mixed_bus_pool) {
+        membus *b = mixed_bus();
+        lss_autoassign_plan p = { .map = mixed_map, .n_map = 5, .store = true, .unknown = LSS_UNKNOWN_POOL,
+                                  .pool_lo = 5, .pool_hi = 12 };
+        lss_master *m = master_default();
+        ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+        /* 5..9 are the map's, 9 also taken: the lowest free pool ID is 10 */
+        ck_assert_int_eq(outcome_of(m, &U)->kind, LSS_OUTCOME_POOL);
+        ck_assert_uint_eq(membus_find(b, &U)->st.active_node_id, 10);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(bad_plans) {
+        lss_master *m = master_default();
+        lss_map_entry bad = { .id = A, .revision_known = true, .node_id = 0 };
+        lss_autoassign_plan p = { .map = &bad, .n_map = 1 };
+        ck_assert_int_eq(lss_master_autoassign(m, &p, 0), -EINVAL);
+        p = (lss_autoassign_plan) { .unknown = LSS_UNKNOWN_POOL, .pool_lo = 10, .pool_hi = 5 };
+        ck_assert_int_eq(lss_master_autoassign(m, &p, 0), -EINVAL);
+        ck_assert_int_eq(lss_master_autoassign(m, NULL, 0), -EINVAL);
+        ck_assert_str_eq(lss_outcome_name(LSS_OUTCOME_CONFLICT), "conflict");
+        size_t n;
+        ck_assert_ptr_null(lss_master_outcomes(m, &n));
+        ck_assert_uint_eq(n, 0);
+        lss_master_free(m);
+}
+END_TEST
+
+static void cancel_after(void *ud, membus *bus, lss_master *m) {
+        unsigned *n = ud;
+        if (++*n == 60)
+                lss_master_cancel(m, membus_now(bus));
+}
+
+START_TEST(cancel_leaves_waiting) {
+        membus *b = mixed_bus();
+        lss_autoassign_plan p = { .map = mixed_map, .n_map = 5, .store = true };
+        lss_master *m = master_default();
+        unsigned n = 0;
+        ck_assert_int_eq(lss_master_autoassign(m, &p, membus_now(b)), 0);
+        const lss_result *r = lss_drive(m, b, 600 * SECOND, cancel_after, &n);
+        ck_assert_int_eq(r->status, LSS_E_CANCELLED);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Many devices mapped by full identity: straight selective switches. */
+START_TEST(mapped_32) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = bus_random(32, 301, 0xEC, 0x1234, &f);
+        lss_map_entry map[32];
+        for (size_t i = 0; i < 32; i++)
+                map[i] = (lss_map_entry) { .id = membus_slave(b, i)->id, .revision_known = true,
+                                           .node_id = (uint8_t) (i + 1) };
+        lss_autoassign_plan p = { .map = map, .n_map = 32, .store = true };
+        lss_master *m = master_default();
+        ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+        for (size_t i = 0; i < 32; i++)
+                ck_assert_uint_eq(membus_slave(b, i)->st.active_node_id, i + 1);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+int main(void) {
+        Suite *s = suite_create("autoassign");
+        TCase *tc = tcase_create("autoassign");
+        tcase_set_timeout(tc, 120);
+        tcase_add_test(tc, encoders_at_node_1);
+        tcase_add_test(tc, mixed_bus_ignore);
+        tcase_add_test(tc, mixed_bus_pool);
+        tcase_add_test(tc, bad_plans);
+        tcase_add_test(tc, cancel_leaves_waiting);
+        tcase_add_test(tc, mapped_32);
+        suite_add_tcase(s, tc);
+        return run_suite(s);
+}
