@@ -55,6 +55,15 @@ static const struct can_filter rx_filters[] = {
         { 0x710, SFF_DATA(0x7F0) },     /* 0x710..0x71F */
         { 0x720, SFF_DATA(0x7E0) },     /* 0x720..0x73F */
         { 0x740, SFF_DATA(0x7C0) },     /* 0x740..0x77F */
+        /* SDO responses 0x581..0x5FF: auto-assignment asks whether a node-ID
+         * is taken by an SDO upload and listens for the answer */
+        { 0x581, SFF_DATA(0x7FF) },
+        { 0x582, SFF_DATA(0x7FE) },
+        { 0x584, SFF_DATA(0x7FC) },
+        { 0x588, SFF_DATA(0x7F8) },
+        { 0x590, SFF_DATA(0x7F0) },
+        { 0x5A0, SFF_DATA(0x7E0) },
+        { 0x5C0, SFF_DATA(0x7C0) },
 };
 
 size_t socketcan_filters(const struct can_filter **ret) {

@@ -55,6 +55,8 @@ int can_raw_open(const char *ifname) {
         const struct can_filter filters[] = {
                 { .can_id = LSS_COB_MASTER, .can_mask = CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_SFF_MASK },
                 { .can_id = NMT_COB, .can_mask = CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_SFF_MASK },
+                /* SDO requests 0x600..0x67F: the master's "is this node-ID taken" probe */
+                { .can_id = 0x600, .can_mask = CAN_EFF_FLAG | CAN_RTR_FLAG | 0x780 },
         };
         const can_err_mask_t no_errors = 0;
         struct sockaddr_can addr = { .can_family = AF_CAN };

@@ -75,7 +75,7 @@ typedef struct fake {
         int clock_ret;
 
         /* setsockopt values seen */
-        struct can_filter filters[16];
+        struct can_filter filters[32];
         size_t n_filters;
         can_err_mask_t err_mask;
         int rxq_ovfl, timestamp;
@@ -118,7 +118,7 @@ static int f_setsockopt(void *ud, int fd, int level, int name, const void *val, 
         if (level == SOL_CAN_RAW && name == CAN_RAW_FILTER) {
                 ck_assert_uint_eq(len % sizeof(struct can_filter), 0);
                 f->n_filters = len / sizeof(struct can_filter);
-                ck_assert_uint_le(f->n_filters, 16);
+                ck_assert_uint_le(f->n_filters, 32);
                 memcpy(f->filters, val, len);
         } else if (level == SOL_CAN_RAW && name == CAN_RAW_ERR_FILTER) {
                 ck_assert_uint_eq(len, sizeof(can_err_mask_t));
@@ -349,6 +349,13 @@ START_TEST(filter_array_exact) {
                 { 0x710, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7F0 },
                 { 0x720, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7E0 },
                 { 0x740, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7C0 },
+                { 0x581, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7FF },
+                { 0x582, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7FE },
+                { 0x584, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7FC },
+                { 0x588, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7F8 },
+                { 0x590, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7F0 },
+                { 0x5A0, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7E0 },
+                { 0x5C0, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7C0 },
         };
         const struct can_filter *got;
         size_t n = socketcan_filters(&got);
@@ -359,13 +366,13 @@ START_TEST(filter_array_exact) {
 END_TEST
 
 /* The kernel's rule, (id & mask) == (filter & mask), over every identifier:
- * exactly 0x7E4 and 0x701..0x77F pass, as standard data frames only. */
+ * exactly 0x7E4, 0x701..0x77F and 0x581..0x5FF pass, as standard data frames only. */
 START_TEST(filter_semantics_all_ids) {
         const struct can_filter *flt;
         size_t n = socketcan_filters(&flt);
 
         for (canid_t id = 0; id <= CAN_SFF_MASK; id++) {
-                bool want = id == 0x7E4 || (id >= 0x701 && id <= 0x77F);
+                bool want = id == 0x7E4 || (id >= 0x701 && id <= 0x77F) || (id >= 0x581 && id <= 0x5FF);
                 const canid_t variants[] = { id, id | CAN_RTR_FLAG, id | CAN_EFF_FLAG, id | CAN_EFF_FLAG | CAN_RTR_FLAG,
                                              id | 0x10000000u | CAN_EFF_FLAG };
 
