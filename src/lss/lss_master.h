@@ -8,8 +8,9 @@
  *
  *     lss_master_start_xxx(m, ..., now);
  *     for (;;) {
- *             while (lss_master_next_tx(m, &f)) send(f);
- *             lss_master_on_sent(m, now());        // the frames are out
+ *             t = now();                           // BEFORE writing: an answer
+ *             while (lss_master_next_tx(m, &f)) send(f);  // may arrive before
+ *             lss_master_on_sent(m, t);            // write() returns
  *             if (lss_master_done(m)) break;
  *             wait for a frame or until lss_master_deadline(m);
  *             frame ? lss_master_on_frame(m, &f, rx_time) : lss_master_on_time(m, now());
@@ -148,7 +149,9 @@ int lss_master_fastscan_assign(lss_master *m, const lss_fastscan_known *known, u
 /* ---- driving ---- */
 void lss_master_on_frame(lss_master *m, const lss_frame *f, uint64_t rx_us);
 void lss_master_on_time(lss_master *m, uint64_t now);
-/* The frames handed out were written at `now` (timeouts run from here). */
+/* The frames handed out were written; `now` is the time taken just before
+ * the first write (timeouts run from here; frames received earlier are
+ * stale, so it must never be later than the real write). */
 void lss_master_on_sent(lss_master *m, uint64_t now);
 /* The transport lost received frames (SO_RXQ_OVFL): the running step is void. */
 void lss_master_on_rx_lost(lss_master *m, uint64_t now);

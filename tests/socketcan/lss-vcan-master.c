@@ -3,6 +3,9 @@
  *   lss-vcan-master IFACE seed            the seed example (raw services)
  *   lss-vcan-master IFACE enumerate       every non-configured slave
  *   lss-vcan-master IFACE assign-all N    fastscan + assign N, N+1, ... until none is left
+ *   lss-vcan-master IFACE nmt-stop        NMT Stop to all nodes
+ *   lss-vcan-master IFACE replug          wait until IFACE is deleted and created
+ *                                         again (re-open by name), then enumerate
  * Prints "device V:P:R:S NODEID" / "assigned V:P:R:S NODEID" lines and a
  * final "status NAME message" line; exit 0 only on success. */
 #include <errno.h>
@@ -11,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "can/rtnl_watch.h"
 #include "can/socketcan.h"
 #include "lss/lss_master.h"
 
@@ -18,6 +22,7 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
         for (;;) {
                 lss_frame f;
                 bool sent = false;
+                uint64_t t_send = socketcan_port_now(p); /* before the write: see lss_master_on_sent() */
                 while (lss_master_next_tx(m, &f)) {
                         int r = socketcan_port_send(p, &f);
                         if (r < 0) {
@@ -27,7 +32,7 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
                         sent = true;
                 }
                 if (sent)
-                        lss_master_on_sent(m, socketcan_port_now(p));
+                        lss_master_on_sent(m, t_send);
                 if (lss_master_done(m))
                         return lss_master_result(m);
                 uint64_t now = socketcan_port_now(p), dl = lss_master_deadline(m);
@@ -50,6 +55,35 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
                 if (lss_master_deadline(m) <= socketcan_port_now(p))
                         lss_master_on_time(m, socketcan_port_now(p));
         }
+}
+
+static void on_link(const rtnl_link *l, void *userdata) {
+        socketcan_port_link_event(userdata, l->ifindex, l->ifname, !l->removed, l->flags);
+}
+
+/* Follow rtnetlink until the port went away and is up again. */
+static int wait_replug(socketcan_port *p) {
+        rtnl_watch *w;
+        int r = rtnl_watch_new(NULL, on_link, p, &w);
+        if (r < 0)
+                return r;
+        int first = socketcan_port_ifindex(p);
+        bool gone = false;
+        printf("waiting for %s to be replugged\n", socketcan_port_ifname(p));
+        for (int i = 0; i < 600; i++) {
+                struct pollfd pfd = { .fd = rtnl_watch_fd(w), .events = POLLIN };
+                if (poll(&pfd, 1, 100) > 0)
+                        rtnl_watch_process(w);
+                if (socketcan_port_state(p) == LSS_LINK_GONE)
+                        gone = true;
+                if (gone && socketcan_port_state(p) == LSS_LINK_UP) {
+                        printf("replugged: ifindex %d -> %d\n", first, socketcan_port_ifindex(p));
+                        rtnl_watch_free(w);
+                        return 0;
+                }
+        }
+        rtnl_watch_free(w);
+        return -ETIMEDOUT;
 }
 
 static int report(const lss_result *r) {
@@ -76,6 +110,7 @@ int main(int argc, char **argv) {
         lss_timing_config c;
         lss_timing_config_default(&c);
         c.timeout_us = 100000; /* a VM under TCG schedules in milliseconds */
+        c.floor_us = 10000;
         c.bitrate = 0;         /* vcan: no wire time */
         lss_master *m = lss_master_new(&c);
         const lss_result *res;
@@ -91,8 +126,15 @@ int main(int argc, char **argv) {
                 rc |= report(drive(m, p));
                 lss_master_switch_global(m, LSS_MODE_WAITING, socketcan_port_now(p));
                 rc |= report(drive(m, p));
-        } else if (strcmp(argv[2], "enumerate") == 0) {
-                lss_master_enumerate(m, NULL, now);
+        } else if (strcmp(argv[2], "nmt-stop") == 0) {
+                lss_master_nmt(m, NMT_CS_STOP, 0, now);
+                rc = report(drive(m, p));
+        } else if (strcmp(argv[2], "enumerate") == 0 || strcmp(argv[2], "replug") == 0) {
+                if (strcmp(argv[2], "replug") == 0 && (r = wait_replug(p)) < 0) {
+                        printf("status replug-failed %s\n", strerror(-r));
+                        return 1;
+                }
+                lss_master_enumerate(m, NULL, socketcan_port_now(p));
                 res = drive(m, p);
                 for (size_t i = 0; i < res->n_devices; i++)
                         print_id("device", &res->devices[i].id, res->devices[i].node_id);

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """The engine over real SocketCAN (vcan0) against lss-sim, with candump -L as
 an independent witness. Skips (77) where there is no vcan0."""
 import glob
@@ -37,10 +37,14 @@ class Rig:
 
     def __init__(self, name, sim_args):
         os.makedirs(ARTIFACTS, exist_ok=True)
+        self.sim_args = sim_args
         self.state = tempfile.mkdtemp(prefix="lss-state-")
         self.log_path = os.path.join(ARTIFACTS, name + ".candump.log")
         self.dump = subprocess.Popen(["candump", "-L", IFACE], stdout=open(self.log_path, "w"))
-        self.sim = subprocess.Popen([SIM, IFACE, "--state", self.state] + sim_args,
+        self.start_sim()
+
+    def start_sim(self):
+        self.sim = subprocess.Popen([SIM, IFACE, "--state", self.state] + self.sim_args,
                                     stdout=subprocess.PIPE, text=True)
         for line in self.sim.stdout:
             if line.strip() == "ready":
@@ -119,10 +123,12 @@ def profile_case(profile, n=8, extra=()):
 
 
 def stray_frames():
+    """Look-alikes during a scan (extended-ID and RTR 0x7E4, DLC 4, answers
+    with a cs no step of a scan waits for) and an unsolicited 0x4F between
+    jobs: all ignored, results exact."""
     rig = Rig("stray-frames", ["--random", "4", "--seed", "9", "--latency", "1"])
-    stop = False
     strays = ["1FFFFFE4#4F00000000000000", "000007E4#4F00000000000000", "7E4#R", "7E4#4F000000",
-              "7E4#5E05000000000000", "7E4#4F00000000000000"]
+              "7E4#1300000000000000", "7E4#1700000000000000"]
     inj = subprocess.Popen(["sh", "-c", "while :; do for f in %s; do cansend %s $f; sleep 0.05; done; done"
                             % (" ".join(strays), IFACE)])
     rc, out = rig.master("enumerate")
@@ -130,8 +136,77 @@ def stray_frames():
     inj.wait()
     found = {l.split()[1] for l in out if l.startswith("device ")}
     states = read_state(rig.state)
+    check(rc == 0 and found == set(states), "stray EFF/RTR/short/wrong-cs frames during a scan: result exact")
+    subprocess.run(["cansend", IFACE, "7E4#4F00000000000000"], check=True)
+    time.sleep(0.2)
+    rc, out = rig.master("enumerate")
+    found = {l.split()[1] for l in out if l.startswith("device ")}
     rig.close()
-    check(rc == 0 and found == set(states), "stray EFF/RTR/short/wrong-cs/unsolicited frames: enumerate still exact")
+    check(rc == 0 and found == set(states), "unsolicited 0x4F between jobs: next scan exact")
+
+
+def encoder_case():
+    """Encoders: all shipped at node-ID 1, LSS only in NMT Stopped."""
+    rig = Rig("encoder", ["--random", "6", "--seed", "3", "--profile", "encoder", "--latency", "1"])
+    before = read_state(rig.state)
+    rc, out = rig.master("enumerate")
+    check(not any(l.startswith("device ") for l in out), "encoder: ignores LSS before NMT Stop")
+    rc, _ = rig.master("nmt-stop")
+    rc, out = rig.master("assign-all", "10")
+    assigned = {l.split()[1]: int(l.split()[2]) for l in out if l.startswith("assigned ")}
+    after = read_state(rig.state)
+    frames = rig.frames()
+    rig.close()
+    check(rc == 0 and set(assigned) == set(before), "encoder: 6 encoders at node-ID 1 each got their own ID")
+    check(all(int(after[i]["active_node_id"]) == nid for i, nid in assigned.items()),
+          "encoder: state files agree")
+    check(no_overlap(frames), "encoder: one outstanding LSS request at a time")
+
+
+def link_down_mid_scan():
+    rig = Rig("link-down", ["--random", "8", "--seed", "11", "--latency", "1"])
+    p = subprocess.Popen([MASTER, IFACE, "enumerate"], stdout=subprocess.PIPE, text=True)
+    time.sleep(0.5)
+    subprocess.run(["ip", "link", "set", IFACE, "down"], check=True)
+    out, _ = p.communicate(timeout=120)
+    sys.stdout.write(out)
+    subprocess.run(["ip", "link", "set", IFACE, "up"], check=True)
+    status = [l for l in out.splitlines() if l.startswith("status ")]
+    check(p.returncode != 0 and status and status[-1].startswith("status bus-down"),
+          "link down mid-scan: a clear bus-down error (%s)" % (status[-1] if status else "no status"))
+    time.sleep(0.3)
+    rig.sim.terminate()
+    rig.sim.wait(10)
+    # lss-sim lost its link too: power-cycle it (same slaves) and scan again
+    rig.start_sim()
+    rc, out = rig.master("enumerate")
+    found = {l.split()[1] for l in out if l.startswith("device ")}
+    states = read_state(rig.state)
+    rig.close()
+    check(rc == 0 and found == set(states), "link up again: enumerate exact")
+
+
+def replug():
+    rig = Rig("replug", ["--random", "3", "--seed", "12", "--latency", "1"])
+    p = subprocess.Popen([MASTER, IFACE, "replug"], stdout=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    rig.sim.terminate()
+    rig.sim.wait(10)
+    rig.dump.terminate()
+    rig.dump.wait(10)
+    subprocess.run(["ip", "link", "del", IFACE], check=True)
+    time.sleep(0.5)
+    subprocess.run(["ip", "link", "add", "dev", IFACE, "type", "vcan"], check=True)
+    subprocess.run(["ip", "link", "set", IFACE, "up"], check=True)
+    rig.dump = subprocess.Popen(["candump", "-L", IFACE], stdout=open(rig.log_path, "a"))
+    rig.start_sim()
+    out, _ = p.communicate(timeout=120)
+    sys.stdout.write(out)
+    found = {l.split()[1] for l in out if l.startswith("device ")}
+    states = read_state(rig.state)
+    rig.close()
+    check(p.returncode == 0 and "replugged" in out and found == set(states),
+          "ip link del + add: re-opened by name (new ifindex) and scanned")
 
 
 def main():
@@ -141,7 +216,10 @@ def main():
     seed_example()
     for profile in ("servo-drive", "generic", "canopennode", "transmitter"):
         profile_case(profile)
+    encoder_case()
     stray_frames()
+    link_down_mid_scan()
+    replug()
     print("%d failures" % len(failures))
     return 1 if failures else 0
 
