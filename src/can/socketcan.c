@@ -435,7 +435,18 @@ int socketcan_port_link_event(socketcan_port *p, int ifindex, const char *ifname
                 if (r < 0)
                         return r;
         }
-        set_state(p, (flags & IFF_UP) && (flags & IFF_RUNNING) ? LSS_LINK_UP : LSS_LINK_DOWN);
+        bool up = (flags & IFF_UP) && (flags & IFF_RUNNING);
+        if (up && before != LSS_LINK_UP && p->fd >= 0 && p->fd == before_fd) {
+                /* A CAN_RAW socket bound (or left) while its interface was down
+                 * carries a pending ENETDOWN that the next send or recv would
+                 * report although the link is up now: start with a fresh one. */
+                r = socketcan_port_reopen(p);
+                if (r == -ENODEV)
+                        return 1;
+                if (r < 0)
+                        return r;
+        }
+        set_state(p, up ? LSS_LINK_UP : LSS_LINK_DOWN);
         return p->state != before || p->fd != before_fd;
 }
 

@@ -4,6 +4,8 @@
  *   lss-vcan-master IFACE enumerate       every non-configured slave
  *   lss-vcan-master IFACE assign-all N    fastscan + assign N, N+1, ... until none is left
  *   lss-vcan-master IFACE nmt-stop        NMT Stop to all nodes
+ *   lss-vcan-master IFACE autoassign [--nmt-stop] [--any-revision] V:P:R:S=NODE...
+ *                                         the auto-assignment pass with that map
  *   lss-vcan-master IFACE replug          wait until IFACE is deleted and created
  *                                         again (re-open by name), then enumerate
  * Prints "device V:P:R:S NODEID" / "assigned V:P:R:S NODEID" lines and a
@@ -16,6 +18,7 @@
 
 #include "can/rtnl_watch.h"
 #include "can/socketcan.h"
+#include "lss/lss_autoassign.h"
 #include "lss/lss_master.h"
 
 static const lss_result *drive(lss_master *m, socketcan_port *p) {
@@ -126,6 +129,36 @@ int main(int argc, char **argv) {
                 rc |= report(drive(m, p));
                 lss_master_switch_global(m, LSS_MODE_WAITING, socketcan_port_now(p));
                 rc |= report(drive(m, p));
+        } else if (strcmp(argv[2], "autoassign") == 0) {
+                lss_map_entry map[128];
+                lss_autoassign_plan plan = { .map = map, .store = true };
+                bool any_rev = false;
+                for (int i = 3; i < argc; i++) {
+                        unsigned v, pr, rv, se, node;
+                        if (strcmp(argv[i], "--nmt-stop") == 0)
+                                plan.nmt_stop = true;
+                        else if (strcmp(argv[i], "--any-revision") == 0)
+                                any_rev = true;
+                        else if (plan.n_map < 128 && sscanf(argv[i], "%x:%x:%x:%x=%u", &v, &pr, &rv, &se, &node) == 5)
+                                map[plan.n_map++] = (lss_map_entry) { .id = { v, pr, rv, se }, .revision_known = !any_rev,
+                                                                      .node_id = (uint8_t) node };
+                        else {
+                                fprintf(stderr, "bad map entry %s\n", argv[i]);
+                                return 2;
+                        }
+                }
+                if (lss_master_autoassign(m, &plan, now) < 0) {
+                        fprintf(stderr, "bad plan\n");
+                        return 2;
+                }
+                res = drive(m, p);
+                size_t n;
+                const lss_outcome *o = lss_master_outcomes(m, &n);
+                for (size_t i = 0; i < n; i++)
+                        printf("outcome %08x:%08x:%08x:%08x %s %u %u %s\n", o[i].id.vendor, o[i].id.product,
+                               o[i].id.revision, o[i].id.serial, lss_outcome_name(o[i].kind), o[i].old_node_id,
+                               o[i].new_node_id, o[i].message);
+                rc = report(res);
         } else if (strcmp(argv[2], "nmt-stop") == 0) {
                 lss_master_nmt(m, NMT_CS_STOP, 0, now);
                 rc = report(drive(m, p));

@@ -1198,12 +1198,13 @@ START_TEST(link_events) {
         ck_assert_int_eq(socketcan_port_link_event(p, 7, "can0", true, up), 0);
         ck_assert_uint_eq(count_calls(C_SOCKET), 1);
 
-        /* down and up, same socket */
+        /* down and up: a fresh socket (the old one holds a pending ENETDOWN) */
         ck_assert_int_eq(socketcan_port_link_event(p, 7, "can0", true, IFF_UP), 1);
         ck_assert_int_eq(socketcan_port_state(p), LSS_LINK_DOWN);
+        ck_assert_uint_eq(count_calls(C_SOCKET), 1);
         ck_assert_int_eq(socketcan_port_link_event(p, 7, "", true, up), 1); /* nameless but our ifindex */
         ck_assert_int_eq(socketcan_port_state(p), LSS_LINK_UP);
-        ck_assert_uint_eq(count_calls(C_SOCKET), 1);
+        ck_assert_uint_eq(count_calls(C_SOCKET), 2);
 
         /* deleted */
         ck_assert_int_eq(socketcan_port_link_event(p, 7, "can0", false, 0), 1);
