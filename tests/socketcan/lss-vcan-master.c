@@ -163,9 +163,15 @@ int main(int argc, char **argv) {
                 lss_master_nmt(m, NMT_CS_STOP, 0, now);
                 rc = report(drive(m, p));
         } else if (strcmp(argv[2], "enumerate") == 0 || strcmp(argv[2], "replug") == 0) {
-                if (strcmp(argv[2], "replug") == 0 && (r = wait_replug(p)) < 0) {
-                        printf("status replug-failed %s\n", strerror(-r));
-                        return 1;
+                if (strcmp(argv[2], "replug") == 0) {
+                        if ((r = wait_replug(p)) < 0) {
+                                printf("status replug-failed %s\n", strerror(-r));
+                                return 1;
+                        }
+                        /* the test starts the simulated slaves on the new interface, then says go */
+                        char go[8];
+                        if (!fgets(go, sizeof(go), stdin))
+                                return 1;
                 }
                 lss_master_enumerate(m, NULL, socketcan_port_now(p));
                 res = drive(m, p);
