@@ -64,7 +64,10 @@ typedef struct lss_assign_state {
         lss_fastscan_state fs;
 } lss_assign_state;
 
-typedef struct lss_range_item { uint32_t rlo, rhi, slo, shi; } lss_range_item;
+typedef struct lss_range_item {
+        uint32_t rlo, rhi, slo, shi;
+        bool asked_again;
+} lss_range_item;
 
 typedef struct lss_scan_state {
         int pc, vpc;

@@ -8,9 +8,11 @@
  *
  *     lss_master_start_xxx(m, ..., now);
  *     for (;;) {
- *             t = now();                           // BEFORE writing: an answer
- *             while (lss_master_next_tx(m, &f)) send(f);  // may arrive before
- *             lss_master_on_sent(m, t);            // write() returns
+ *             while (lss_master_next_tx(m, &f)) {
+ *                     t = now();                   // before each write: an
+ *                     send(f);                     // answer may arrive before
+ *             }                                    // write() returns
+ *             lss_master_on_sent(m, t);            // t of the last frame
  *             if (lss_master_done(m)) break;
  *             wait for a frame or until lss_master_deadline(m);
  *             frame ? lss_master_on_frame(m, &f, rx_time) : lss_master_on_time(m, now());
@@ -150,8 +152,9 @@ int lss_master_fastscan_assign(lss_master *m, const lss_fastscan_known *known, u
 void lss_master_on_frame(lss_master *m, const lss_frame *f, uint64_t rx_us);
 void lss_master_on_time(lss_master *m, uint64_t now);
 /* The frames handed out were written; `now` is the time taken just before
- * the first write (timeouts run from here; frames received earlier are
- * stale, so it must never be later than the real write). */
+ * the LAST of them was written (timeouts run from here; frames received
+ * earlier are stale: no slave answers before it has the whole request, so
+ * this must never be later than that write). */
 void lss_master_on_sent(lss_master *m, uint64_t now);
 /* The transport lost received frames (SO_RXQ_OVFL): the running step is void. */
 void lss_master_on_rx_lost(lss_master *m, uint64_t now);

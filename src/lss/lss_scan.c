@@ -10,7 +10,9 @@
  *
  * Slowscan: identify-remote-slave bisection over revision, then serial, for
  * one vendor/product; finds configured and non-configured slaves that
- * implement the identify services. Candidates are verified the same way. */
+ * implement the identify services. A silent range is asked twice before it
+ * is dropped (a missed answer would lose a slave silently). Candidates are
+ * verified the same way. */
 #include <errno.h>
 #include <stdlib.h>
 
@@ -42,6 +44,7 @@ static int stack_push(lss_scan_state *s, uint32_t rlo, uint32_t rhi, uint32_t sl
         s->stack[s->n_stack].rhi = rhi;
         s->stack[s->n_stack].slo = slo;
         s->stack[s->n_stack].shi = shi;
+        s->stack[s->n_stack].asked_again = false;
         s->n_stack++;
         return 0;
 }
@@ -160,8 +163,17 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
                 }
                 step_start(m);
                 PT_YIELD(&s->pc);
-                if (!step_answered(m))
+                if (!step_answered(m)) {
+                        /* Unlike fastscan, nothing later would notice a missed
+                         * answer (a slow slave): ask a silent range once more
+                         * before giving it up. */
+                        if (!s->cur.asked_again) {
+                                s->cur.asked_again = true;
+                                s->stack[s->n_stack++] = s->cur;
+                                m->stats.retries++;
+                        }
                         continue;
+                }
                 if (s->cur.rlo == s->cur.rhi && s->cur.slo == s->cur.shi) {
                         lss_identity id = { s->range.vendor, s->range.product, s->cur.rlo, s->cur.slo };
                         if (cand_add(s, &id) < 0) {

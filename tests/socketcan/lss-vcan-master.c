@@ -25,9 +25,14 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
         for (;;) {
                 lss_frame f;
                 bool sent = false;
-                uint64_t t_send = socketcan_port_now(p); /* before the write: see lss_master_on_sent() */
+                uint64_t t_send = 0;
                 while (lss_master_next_tx(m, &f)) {
+                        /* taken before the last write: see lss_master_on_sent() */
+                        t_send = socketcan_port_now(p);
                         int r = socketcan_port_send(p, &f);
+                        if (getenv("LSS_DEBUG"))
+                                fprintf(stderr, "send %03X fd %d ifindex %d state %d -> %d\n", (unsigned) f.id,
+                                        socketcan_port_fd(p), socketcan_port_ifindex(p), socketcan_port_state(p), r);
                         if (r < 0) {
                                 lss_master_on_bus_error(m, LSS_E_BUS_DOWN, strerror(-r), socketcan_port_now(p));
                                 return lss_master_result(m);
