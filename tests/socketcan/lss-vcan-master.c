@@ -50,8 +50,12 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
                         return lss_master_result(m);
                 uint64_t rx;
                 int r;
-                while ((r = socketcan_port_recv(p, &f, &rx)) > 0)
+                while ((r = socketcan_port_recv(p, &f, &rx)) > 0) {
+                        if (getenv("LSS_DEBUG"))
+                                fprintf(stderr, "recv %03X %02X rx %llu now %llu\n", (unsigned) f.id, f.data[0],
+                                        (unsigned long long) rx, (unsigned long long) socketcan_port_now(p));
                         lss_master_on_frame(m, &f, rx);
+                }
                 if (r < 0) {
                         lss_master_on_bus_error(m, LSS_E_BUS_DOWN, strerror(-r), socketcan_port_now(p));
                         return lss_master_result(m);
@@ -95,6 +99,8 @@ static int wait_replug(socketcan_port *p) {
 }
 
 static int report(const lss_result *r) {
+        if (getenv("LSS_DEBUG"))
+                fprintf(stderr, "result: %zu devices\n", r->n_devices);
         printf("status %s %s\n", lss_status_name(r->status), r->message);
         return r->status == LSS_OK ? 0 : 1;
 }
