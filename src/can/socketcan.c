@@ -204,17 +204,44 @@ uint64_t socketcan_port_now(socketcan_port *p) {
  * of them is right and the other is only earlier. Finally nothing can arrive
  * after we read it: clamp to the read time. Without a timestamp the read time
  * is the best upper bound we have. */
+/* CLOCK_REALTIME - CLOCK_MONOTONIC, read between two monotonic reads so
+ * that a preemption cannot skew it: the narrowest of a few tries wins, and
+ * the error is at most half its gap (a wrong offset would make an answer
+ * look older than it is, and the engine would drop it as stale). */
+static int64_t clock_offset(socketcan_port *p, uint64_t *mono) {
+        int64_t best = 0;
+        uint64_t best_gap = UINT64_MAX;
+        *mono = 0;
+        for (int i = 0; i < 4; i++) {
+                uint64_t m1 = clock_us(p, CLOCK_MONOTONIC);
+                uint64_t r = clock_us(p, CLOCK_REALTIME);
+                uint64_t m2 = clock_us(p, CLOCK_MONOTONIC);
+                uint64_t gap = m2 >= m1 ? m2 - m1 : 0;
+                if (gap < best_gap) {
+                        best_gap = gap;
+                        best = (int64_t) r - (int64_t) (m1 + gap / 2);
+                        *mono = m2;
+                }
+                if (gap <= 20)
+                        break;
+        }
+        return best;
+}
+
 static uint64_t rx_time(socketcan_port *p, const struct timeval *tv) {
-        uint64_t mono = clock_us(p, CLOCK_MONOTONIC);
-        int64_t offset = (int64_t) clock_us(p, CLOCK_REALTIME) - (int64_t) mono;
+        uint64_t mono = 0;
+        int64_t offset = clock_offset(p, &mono);
         int64_t t = (int64_t) mono;
 
         if (tv) {
                 int64_t stamp = (int64_t) tv->tv_sec * 1000000 + tv->tv_usec;
-
                 t = stamp - offset;
+                /* A realtime step between arrival and now would shift the frame;
+                 * the sample from the last send/recv (< 1 s old) bounds it: take
+                 * the earlier, so a stale frame never looks fresh. */
                 if (p->have_offset && mono - p->offset_at_us <= OFFSET_SAMPLE_MAX_AGE_US && stamp - p->offset_us < t)
                         t = stamp - p->offset_us;
+                /* never in the future, whatever the clocks did */
                 if (t > (int64_t) mono)
                         t = (int64_t) mono;
                 if (t < 0)

@@ -1,0 +1,861 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <time.h>
+
+#include "daemon/lssd_bus.h"
+#include "daemon/lssd_errors.h"
+#include "daemon/lssd_jobs.h"
+#include "daemon/lssd_log.h"
+#include "daemon/lssd_path.h"
+#include "daemon/lssd_vtables.h"
+
+/* Frames read per wake-up before the other buses get their turn. */
+#define RX_BATCH 64u
+
+static void bus_process(lssd_bus *b);
+static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata);
+
+uint64_t lssd_bus_now(lssd_bus *b) {
+        return lss_transport_now(&b->transport);
+}
+
+uint64_t lssd_realtime_us(void) {
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        return (uint64_t) ts.tv_sec * 1000000u + (uint64_t) ts.tv_nsec / 1000u;
+}
+
+lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
+        lssd_bus_config *d = malloc(sizeof(*d));
+        if (!d)
+                return NULL;
+        *d = *c;
+        d->devices = NULL;
+        if (c->n_devices > 0) {
+                d->devices = malloc(c->n_devices * sizeof(*d->devices));
+                if (!d->devices) {
+                        free(d);
+                        return NULL;
+                }
+                memcpy(d->devices, c->devices, c->n_devices * sizeof(*d->devices));
+        }
+        return d;
+}
+
+lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c) {
+        if (c) {
+                free(c->devices);
+                free(c);
+        }
+        return NULL;
+}
+
+/* The engine's timing for a bus. lss_timeout_ms is the no-answer wait of
+ * first contacts and the cap of the adaptive wait; the adaptive wait never
+ * drops below half of it, and the guards never below a twentieth: answers
+ * from slaves on a loaded host come with milliseconds of jitter, and a wait
+ * cut to the measured latency would take a late answer for silence. Frame
+ * times count at the bus's bit rate, except on virtual interfaces, whose
+ * frames arrive the moment they are sent. */
+static void bus_timing(const lssd_bus *b, lss_timing_config *tc) {
+        const lssd_bus_config *c = b->config;
+        lss_timing_config_default(tc);
+        tc->timeout_us = c->lss_timeout_ms * 1000u;
+        tc->adaptive = c->lss_timing == LSSD_LSS_TIMING_ADAPTIVE;
+        if (tc->floor_us < tc->timeout_us / 2)
+                tc->floor_us = tc->timeout_us / 2;
+        if (tc->guard_floor_us < tc->timeout_us / 20)
+                tc->guard_floor_us = tc->timeout_us / 20;
+        tc->bitrate = b->link_virtual ? 0 : lssd_bus_bitrate(b);
+}
+
+static void bus_update_timing(lssd_bus *b) {
+        lss_timing_config tc;
+        bus_timing(b, &tc);
+        lss_master_set_timing(b->engine, &tc);
+}
+
+/* ---- published state ---- */
+
+const char *lssd_bus_state(const lssd_bus *b) {
+        if (b->link != LSS_LINK_UP)
+                return "down";
+        if (b->bus_state == LSS_BUS_OFF)
+                return "bus-off";
+        if (b->bus_state == LSS_BUS_ERROR_PASSIVE)
+                return "error-passive";
+        if (b->job || b->queue.n > 0 || b->holder_name)
+                return "busy";
+        return "idle";
+}
+
+uint32_t lssd_bus_bitrate(const lssd_bus *b) {
+        return b->link_bitrate ? b->link_bitrate : b->config->bitrate;
+}
+
+const char *lssd_bus_job_name(const lssd_bus *b) {
+        return b->job ? lssd_job_name(b->job) : "";
+}
+
+bool lssd_bus_idle(const lssd_bus *b) {
+        return !b->job && b->queue.n == 0 && !b->engine_running;
+}
+
+static void bus_update_published(lssd_bus *b) {
+        const char *s = lssd_bus_state(b);
+        if (!b->state || strcmp(s, b->state) != 0) {
+                /* STATUS= tells about trouble, not about every job */
+                bool trouble = !b->state || (strcmp(s, "idle") != 0 && strcmp(s, "busy") != 0) ||
+                               (strcmp(b->state, "idle") != 0 && strcmp(b->state, "busy") != 0);
+                b->state = s;
+                b->changed |= LSSD_BUS_CHANGED_STATE;
+                if (trouble && !b->removing)
+                        lssd_context_notify_status(b->ctx, false);
+        }
+        uint32_t rate = lssd_bus_bitrate(b);
+        if (rate != b->bitrate) {
+                b->bitrate = rate;
+                b->changed |= LSSD_BUS_CHANGED_BITRATE;
+        }
+}
+
+void lssd_bus_flush_changes(lssd_bus *b) {
+        char *names[6];
+        size_t n = 0;
+
+        if (!b->changed || !b->ctx->bus || !b->slot)
+                return;
+        if (b->changed & LSSD_BUS_CHANGED_STATE)
+                names[n++] = (char *) "State";
+        if (b->changed & LSSD_BUS_CHANGED_BITRATE)
+                names[n++] = (char *) "Bitrate";
+        if (b->changed & LSSD_BUS_CHANGED_JOB)
+                names[n++] = (char *) "Job";
+        if (b->changed & LSSD_BUS_CHANGED_PROGRESS)
+                names[n++] = (char *) "Progress";
+        if (b->changed & LSSD_BUS_CHANGED_QUEUE_LENGTH)
+                names[n++] = (char *) "QueueLength";
+        names[n] = NULL;
+        b->changed = 0;
+        int r = sd_bus_emit_properties_changed_strv(b->ctx->bus, b->path, LSSD_BUS_IFACE, names);
+        if (r < 0)
+                log_debug("%s: failed to emit PropertiesChanged: %s", b->ifname, strerror(-r));
+}
+
+static void set_progress(lssd_bus *b, double p) {
+        if (p < 0)
+                p = 0;
+        if (p > 1)
+                p = 1;
+        /* whole percents are enough for a progress bar and keep the signal rate sane */
+        if (fabs(p - b->progress) < 0.01 && !(p == 0 && b->progress != 0) && !(p == 1 && b->progress != 1))
+                return;
+        b->progress = p;
+        b->changed |= LSSD_BUS_CHANGED_PROGRESS;
+}
+
+static void on_engine_progress(void *userdata, double p) {
+        lssd_bus *b = userdata;
+        if (!b->job || b->job->n_stages == 0)
+                return;
+        set_progress(b, ((double) b->job->stage + p) / (double) b->job->n_stages);
+}
+
+/* ---- driving the engine ---- */
+
+static void bus_arm_timer(lssd_bus *b) {
+        uint64_t t = lss_master_deadline(b->engine);
+        if (b->sim) {
+                uint64_t s = lssd_simbus_next_event(b->sim);
+                if (s < t)
+                        t = s;
+        }
+        if (t == UINT64_MAX) {
+                (void) sd_event_source_set_enabled(b->timer_source, SD_EVENT_OFF);
+                return;
+        }
+        int r = sd_event_source_set_time(b->timer_source, t);
+        if (r >= 0)
+                r = sd_event_source_set_enabled(b->timer_source, SD_EVENT_ONESHOT);
+        if (r < 0)
+                log_error("%s: failed to arm the timer: %s", b->ifname, strerror(-r));
+}
+
+/* Sends what the engine wants sent. A transport error ends the running
+ * operation (the frames behind the failed one are dropped, never reordered). */
+static void bus_flush_tx(lssd_bus *b) {
+        lss_frame f;
+        uint64_t sent_at = 0;
+        int err = 0;
+
+        while (lss_master_next_tx(b->engine, &f)) {
+                if (err < 0)
+                        continue;
+                /* An answer may arrive before send() even returns (a slave on
+                 * another CPU, a virtual bus): the frame counts as sent when
+                 * we hand it over, or the engine would take the answer for a
+                 * stale frame. */
+                uint64_t t = lssd_bus_now(b);
+                int r = lss_transport_send(&b->transport, &f);
+                if (r < 0)
+                        err = r;
+                else
+                        sent_at = t;
+        }
+        /* only when something went out: on_sent() restarts the running wait */
+        if (sent_at > 0)
+                lss_master_on_sent(b->engine, sent_at);
+        if (err >= 0)
+                return;
+        uint64_t now = lssd_bus_now(b);
+
+        char why[128];
+        enum lss_status st = b->bus_state == LSS_BUS_OFF ? LSS_E_BUS_OFF : LSS_E_BUS_DOWN;
+        if (err == -ENETDOWN)
+                snprintf(why, sizeof(why), "%s is down", b->ifname);
+        else if (err == -ENODEV || err == -ENXIO)
+                snprintf(why, sizeof(why), "%s does not exist", b->ifname);
+        else if (err == -ETIMEDOUT)
+                snprintf(why, sizeof(why), "%s: transmit queue stayed full (is any other node acknowledging?)",
+                         b->ifname);
+        else
+                snprintf(why, sizeof(why), "%s: send failed: %s", b->ifname, strerror(-err));
+        log_warning("%s", why);
+        lss_master_on_bus_error(b->engine, st, why, now);
+        while (lss_master_next_tx(b->engine, &f))
+                ;
+}
+
+static void bus_job_end(lssd_bus *b) {
+        lssd_job *j = b->job;
+        const lss_master_stats *st = lss_master_get_stats(b->engine);
+        log_debug("%s: %s finished (%s); engine: %" PRIu64 " steps, %" PRIu64 " retries, %" PRIu64
+                  " timeouts, %" PRIu64 " late, %" PRIu64 " stale, %" PRIu64 " ignored, %" PRIu64
+                  " conflicts, wait %u us, latency %u..%u us", b->ifname, lssd_job_name(j),
+                  j->result ? j->result : "failed", st->steps, st->retries, st->timeouts, st->late_answers,
+                  st->stale_frames, st->ignored_frames, st->conflicts, st->timeout_us, st->latency_min_us,
+                  st->latency_max_us);
+        b->job = NULL;
+        b->changed |= LSSD_BUS_CHANGED_JOB;
+        set_progress(b, 0);
+        if (j->request && b->ctx->bus && b->slot)
+                (void) sd_bus_emit_signal(b->ctx->bus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss", lssd_job_name(j),
+                                          j->result ? j->result : "failed");
+        lssd_job_free(j);
+}
+
+static void bus_job_continue(lssd_bus *b, const lss_result *r) {
+        int k = lssd_job_run(b, b->job, r);
+        if (k > 0)
+                b->engine_running = true;
+        else
+                bus_job_end(b);
+}
+
+static void bus_job_begin(lssd_bus *b, lssd_job *j) {
+        b->job = j;
+        j->stage = 0;
+        b->changed |= LSSD_BUS_CHANGED_JOB | LSSD_BUS_CHANGED_QUEUE_LENGTH;
+        set_progress(b, 0);
+        bus_job_continue(b, NULL);
+}
+
+static int on_remove(sd_event_source *s, void *userdata) {
+        lssd_bus *b = userdata;
+        lssd_context_bus_removed(b->ctx, b);
+        return 0;
+}
+
+/* Everything that may have moved the engine ends here: send, collect the
+ * result, continue the job or start the next one, re-arm the timer, publish. */
+static void bus_process(lssd_bus *b) {
+        if (b->processing)
+                return;
+        b->processing = true;
+        for (;;) {
+                bus_flush_tx(b);
+                if (b->engine_running && lss_master_done(b->engine)) {
+                        b->engine_running = false;
+                        bus_job_continue(b, lss_master_result(b->engine));
+                        continue;
+                }
+                if (!b->job && !b->engine_running && b->queue.n > 0) {
+                        bus_job_begin(b, lssd_job_queue_pop(&b->queue));
+                        continue;
+                }
+                break;
+        }
+        b->processing = false;
+
+        bus_arm_timer(b);
+        bus_update_published(b);
+        lssd_bus_flush_changes(b);
+
+        if (lssd_bus_idle(b)) {
+                if (b->removing && !b->remove_source) {
+                        int r = sd_event_add_defer(b->ctx->event, &b->remove_source, on_remove, b);
+                        if (r < 0)
+                                log_error("%s: failed to schedule removal: %s", b->ifname, strerror(-r));
+                }
+                if (b->ctx->stopping)
+                        lssd_context_check_stopped(b->ctx);
+        }
+}
+
+static void bus_poll_rx(lssd_bus *b) {
+        lss_frame f;
+        uint64_t rx;
+        int r = 0;
+
+        for (unsigned i = 0; i < RX_BATCH; i++) {
+                r = lss_transport_recv(&b->transport, &f, &rx);
+                if (r <= 0)
+                        break;
+                lss_master_on_frame(b->engine, &f, rx);
+        }
+        if (r < 0 && r != -EAGAIN && r != -EINTR && r != -ENETDOWN && r != -ENODEV)
+                log_debug("%s: receive failed: %s", b->ifname, strerror(-r));
+}
+
+static void bus_check_status(lssd_bus *b) {
+        lss_transport_status st;
+        if (lss_transport_status_get(&b->transport, &st) < 0)
+                return;
+        uint64_t now = lssd_bus_now(b);
+        if (st.rx_dropped != b->rx_dropped) {
+                log_warning("%s: %" PRIu64 " received frames were lost", b->ifname, st.rx_dropped - b->rx_dropped);
+                b->rx_dropped = st.rx_dropped;
+                lss_master_on_rx_lost(b->engine, now);
+        }
+        if (st.bus != b->bus_state) {
+                log_notice("%s: controller %s", b->ifname, lss_bus_state_to_string(st.bus));
+                b->bus_state = st.bus;
+                if (st.bus == LSS_BUS_OFF && b->engine_running)
+                        lss_master_on_bus_error(b->engine, LSS_E_BUS_OFF, "the controller went bus-off", now);
+        }
+}
+
+static void bus_update_io(lssd_bus *b, bool force) {
+        int fd = lss_transport_get_fd(&b->transport);
+        if (fd == b->io_fd && !force)
+                return;
+        b->io_source = sd_event_source_disable_unref(b->io_source);
+        b->io_fd = -1;
+        if (fd < 0)
+                return;
+        int r = sd_event_add_io(b->ctx->event, &b->io_source, fd, EPOLLIN, on_io, b);
+        if (r < 0) {
+                log_error("%s: failed to watch the socket: %s", b->ifname, strerror(-r));
+                return;
+        }
+        b->io_fd = fd;
+}
+
+static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata) {
+        lssd_bus *b = userdata;
+        bus_poll_rx(b);
+        bus_check_status(b);
+        bus_update_io(b, false);
+        bus_process(b);
+        return 0;
+}
+
+static int on_timer(sd_event_source *s, uint64_t usec, void *userdata) {
+        lssd_bus *b = userdata;
+        if (b->io_fd < 0)
+                bus_poll_rx(b); /* simulated bus: frames are picked up on time */
+        lss_master_on_time(b->engine, lssd_bus_now(b));
+        bus_process(b);
+        return 0;
+}
+
+/* ---- jobs ---- */
+
+static bool is_holder(const lssd_bus *b, const char *sender) {
+        return b->holder_name && sender && strcmp(b->holder_name, sender) == 0;
+}
+
+int lssd_bus_check_available(lssd_bus *b, const char *sender, bool raw, sd_bus_error *error) {
+        if (b->ctx->stopping || b->removing)
+                return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s: lssd is stopping serving this bus", b->ifname);
+        if (b->holder_name && !is_holder(b, sender))
+                return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s (Acquire)", b->ifname,
+                                         b->holder_name);
+        if (raw && !is_holder(b, sender))
+                return sd_bus_error_setf(error, SD_BUS_ERROR_ACCESS_DENIED,
+                                         "Raw LSS services need the bus held: call Acquire() on %s first, "
+                                         "or use Execute()", b->ifname);
+        if (b->link != LSS_LINK_UP)
+                return sd_bus_error_setf(error, LSSD_ERROR_BUS_DOWN, "%s is %s", b->ifname,
+                                         b->link == LSS_LINK_GONE ? "not there" : "down");
+        if (b->bus_state == LSS_BUS_OFF)
+                return sd_bus_error_setf(error, LSSD_ERROR_BUS_OFF, "%s: the controller is bus-off", b->ifname);
+        return 0;
+}
+
+static void bus_queue_reset(lssd_bus *b, bool front) {
+        lssd_job *j;
+        /* one queued where it would go is enough (Acquire/Release in a loop must not grow the queue) */
+        j = front ? b->queue.head : b->queue.tail;
+        if (j && j->type == LSSD_JOB_RESET)
+                return;
+        if (lssd_job_new(LSSD_JOB_RESET, NULL, &j) < 0) {
+                log_error("%s: out of memory queueing the switch to waiting", b->ifname);
+                return;
+        }
+        j->id = ++b->ctx->next_job_id;
+        if (front)
+                lssd_job_queue_push_front(&b->queue, j);
+        else
+                (void) lssd_job_queue_push(&b->queue, j, true);
+        b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
+}
+
+int lssd_bus_submit(lssd_bus *b, lssd_job *j, sd_bus_error *error) {
+        if (lssd_job_queue_push(&b->queue, j, false) < 0)
+                return sd_bus_error_setf(error, LSSD_ERROR_LIMITS_EXCEEDED,
+                                         "%s: %zu jobs are queued already, try again later", b->ifname, b->queue.n);
+        j->id = ++b->ctx->next_job_id;
+        b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
+        bus_process(b);
+        return 0;
+}
+
+/* ---- holder ---- */
+
+static void bus_drop_holder(lssd_bus *b, const char *why) {
+        if (!b->holder_name)
+                return;
+        log_info("%s: released by %s (%s); switching every slave to waiting", b->ifname, b->holder_name, why);
+        b->holder = sd_bus_track_unref(b->holder);
+        free(b->holder_name);
+        b->holder_name = NULL;
+        bus_queue_reset(b, false);
+}
+
+static int on_holder_gone(sd_bus_track *t, void *userdata) {
+        lssd_bus *b = userdata;
+        /* a raw service of the vanished holder has nobody to answer to */
+        if (b->job && b->job->type == LSSD_JOB_RAW && b->engine_running)
+                lss_master_cancel(b->engine, lssd_bus_now(b));
+        bus_drop_holder(b, "the holder left the bus");
+        bus_process(b);
+        return 0;
+}
+
+int lssd_bus_acquire(lssd_bus *b, sd_bus_message *m, sd_bus_error *error) {
+        const char *sender = sd_bus_message_get_sender(m);
+        int r;
+
+        if (!sender)
+                return sd_bus_error_set(error, SD_BUS_ERROR_ACCESS_DENIED, "Acquire() needs a bus connection");
+        if (is_holder(b, sender))
+                return 0;
+        if (b->ctx->stopping || b->removing)
+                return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s: lssd is stopping serving this bus", b->ifname);
+        if (b->holder_name)
+                return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s already", b->ifname,
+                                         b->holder_name);
+
+        r = sd_bus_track_new(sd_bus_message_get_bus(m), &b->holder, on_holder_gone, b);
+        if (r < 0)
+                return r;
+        r = sd_bus_track_add_sender(b->holder, m);
+        if (r >= 0) {
+                b->holder_name = strdup(sender);
+                if (!b->holder_name)
+                        r = -ENOMEM;
+        }
+        if (r < 0) {
+                b->holder = sd_bus_track_unref(b->holder);
+                return r;
+        }
+        log_info("%s: held by %s", b->ifname, sender);
+        bus_process(b);
+        return 0;
+}
+
+int lssd_bus_release(lssd_bus *b, const char *sender, sd_bus_error *error) {
+        if (!b->holder_name)
+                return 0;
+        if (!is_holder(b, sender))
+                return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s, not by the caller", b->ifname,
+                                         b->holder_name);
+        bus_drop_holder(b, "Release()");
+        bus_process(b);
+        return 0;
+}
+
+int lssd_bus_cancel(lssd_bus *b, const char *sender, sd_bus_error *error) {
+        if (!b->job || b->job->type == LSSD_JOB_RESET || !b->engine_running)
+                return 0;
+        if (b->holder_name && !is_holder(b, sender))
+                return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s (Acquire)", b->ifname,
+                                         b->holder_name);
+        log_info("%s: cancelling %s for %s", b->ifname, lssd_job_name(b->job), sender ? sender : "?");
+        lss_master_cancel(b->engine, lssd_bus_now(b));
+        bus_process(b);
+        return 0;
+}
+
+/* ---- link ---- */
+
+static void on_link_state(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata) {
+        lssd_bus *b = userdata;
+        /* the fd is still open now but not after we return: forget it here */
+        if (new_state == LSS_LINK_GONE) {
+                b->io_source = sd_event_source_disable_unref(b->io_source);
+                b->io_fd = -1;
+        }
+        b->link_changed = true;
+}
+
+static void bus_after_link_change(lssd_bus *b) {
+        lss_link_state old = b->link, now_state = socketcan_port_state(b->port);
+        b->link_changed = false;
+        b->link = now_state;
+        bus_update_io(b, true);
+        if (old == now_state)
+                return;
+
+        log_notice("%s: link %s", b->ifname, lss_link_state_to_string(now_state));
+        if (now_state != LSS_LINK_UP && b->engine_running) {
+                char why[64];
+                snprintf(why, sizeof(why), "%s went %s", b->ifname, lss_link_state_to_string(now_state));
+                lss_master_on_bus_error(b->engine, LSS_E_BUS_DOWN, why, lssd_bus_now(b));
+        }
+        /* whatever happened while we could not talk: the first frame is switch-global waiting */
+        if (now_state == LSS_LINK_UP)
+                bus_queue_reset(b, true);
+        bus_process(b);
+}
+
+void lssd_bus_link_event(lssd_bus *b, const rtnl_link *link) {
+        if (!b->port)
+                return;
+        if (link->ifname[0] && strcmp(link->ifname, b->ifname) == 0 && !link->removed) {
+                uint32_t rate = strcmp(link->kind, "can") == 0 ? link->bitrate : 0;
+                bool virt = strcmp(link->kind, "vcan") == 0 || strcmp(link->kind, "vxcan") == 0;
+                if (rate != b->link_bitrate || virt != b->link_virtual) {
+                        b->link_bitrate = rate;
+                        b->link_virtual = virt;
+                        bus_update_timing(b);
+                        bus_update_published(b);
+                        lssd_bus_flush_changes(b);
+                }
+        }
+        int r = socketcan_port_link_event(b->port, link->ifindex, link->ifname, !link->removed, link->flags);
+        if (r < 0)
+                log_warning("%s: failed to re-open: %s", b->ifname, strerror(-r));
+        if (r != 0 || b->link_changed)
+                bus_after_link_change(b);
+}
+
+/* ---- stopping ---- */
+
+void lssd_bus_stop(lssd_bus *b, const char *why) {
+        lssd_job *j;
+        while ((j = lssd_job_queue_pop(&b->queue))) {
+                if (j->request) {
+                        lssd_job_abort(j, LSSD_ERROR_CANCELLED, why);
+                        if (b->ctx->bus && b->slot)
+                                (void) sd_bus_emit_signal(b->ctx->bus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss",
+                                                          lssd_job_name(j), "cancelled");
+                }
+                lssd_job_free(j);
+        }
+        b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
+        if (b->holder_name) {
+                log_info("%s: dropping holder %s: %s", b->ifname, b->holder_name, why);
+                b->holder = sd_bus_track_unref(b->holder);
+                free(b->holder_name);
+                b->holder_name = NULL;
+        }
+        if (b->engine_running) {
+                log_info("%s: cancelling %s: %s", b->ifname, lssd_job_name(b->job), why);
+                lss_master_cancel(b->engine, lssd_bus_now(b));
+        }
+        if (b->link == LSS_LINK_UP)
+                bus_queue_reset(b, false);
+        bus_process(b);
+}
+
+/* ---- devices ---- */
+
+lssd_device *lssd_bus_find_device(lssd_bus *b, const lss_identity *id) {
+        for (lssd_device *d = b->devices; d; d = d->next)
+                if (lss_identity_equal(&d->id, id))
+                        return d;
+        return NULL;
+}
+
+lssd_device *lssd_bus_device_with_node_id(lssd_bus *b, uint8_t node_id, const lss_identity *except) {
+        if (!lss_node_id_valid(node_id))
+                return NULL;
+        for (lssd_device *d = b->devices; d; d = d->next)
+                if (!d->missing && d->node_id == node_id && !(except && lss_identity_equal(&d->id, except)))
+                        return d;
+        return NULL;
+}
+
+static uint8_t mapped_node_id(const lssd_bus *b, const lss_identity *id) {
+        const lssd_device_config *c = lssd_config_lookup_device(b->config, id);
+        return c ? c->node_id : 0;
+}
+
+static const char *device_state(lssd_bus *b, const lssd_device *d) {
+        bool conflict = lssd_bus_device_with_node_id(b, d->node_id, &d->id) != NULL;
+        return lssd_device_state(d->node_id, d->mapped_node_id, d->missing, conflict, d->assigned);
+}
+
+int lssd_bus_get_device(lssd_bus *b, const lss_identity *id, uint8_t node_id, lssd_device **ret) {
+        lssd_device *d = lssd_bus_find_device(b, id);
+        int r;
+
+        if (d) {
+                *ret = d;
+                return 0;
+        }
+        r = lssd_device_new(b, b->ifname, id, &d);
+        if (r < 0)
+                return r;
+        d->node_id = node_id;
+        d->mapped_node_id = mapped_node_id(b, id);
+        d->last_seen = lssd_realtime_us();
+        if (b->ctx->bus) {
+                r = sd_bus_add_object_vtable(b->ctx->bus, &d->slot, d->path, LSSD_DEVICE_IFACE, lssd_device_vtable,
+                                             d);
+                if (r < 0) {
+                        lssd_device_free(d);
+                        return r;
+                }
+        }
+        /* append: objects keep the order they were found in */
+        lssd_device **tail = &b->devices;
+        while (*tail)
+                tail = &(*tail)->next;
+        *tail = d;
+        b->n_devices++;
+        d->state = device_state(b, d);
+        if (b->ctx->bus) {
+                r = sd_bus_emit_object_added(b->ctx->bus, d->path);
+                if (r < 0)
+                        log_debug("%s: failed to announce %s: %s", b->ifname, d->path, strerror(-r));
+        }
+        /* a new device can put others in conflict */
+        lssd_bus_refresh_devices(b);
+        *ret = d;
+        return 1;
+}
+
+void lssd_bus_refresh_devices(lssd_bus *b) {
+        for (lssd_device *d = b->devices; d; d = d->next) {
+                uint8_t mapped = mapped_node_id(b, &d->id);
+                if (mapped != d->mapped_node_id) {
+                        d->mapped_node_id = mapped;
+                        d->changed |= LSSD_DEVICE_CHANGED_MAPPED_NODE_ID;
+                }
+        }
+        for (lssd_device *d = b->devices; d; d = d->next) {
+                const char *s = device_state(b, d);
+                if (strcmp(s, d->state) != 0) {
+                        d->state = s;
+                        d->changed |= LSSD_DEVICE_CHANGED_STATE;
+                }
+        }
+        for (lssd_device *d = b->devices; d; d = d->next) {
+                char *names[5];
+                size_t n = 0;
+                if (!d->changed)
+                        continue;
+                if (d->changed & LSSD_DEVICE_CHANGED_NODE_ID)
+                        names[n++] = (char *) "NodeId";
+                if (d->changed & LSSD_DEVICE_CHANGED_MAPPED_NODE_ID)
+                        names[n++] = (char *) "MappedNodeId";
+                if (d->changed & LSSD_DEVICE_CHANGED_STATE)
+                        names[n++] = (char *) "State";
+                if (d->changed & LSSD_DEVICE_CHANGED_LAST_SEEN)
+                        names[n++] = (char *) "LastSeen";
+                names[n] = NULL;
+                d->changed = 0;
+                if (b->ctx->bus && d->slot)
+                        (void) sd_bus_emit_properties_changed_strv(b->ctx->bus, d->path, LSSD_DEVICE_IFACE, names);
+        }
+}
+
+/* ---- life cycle ---- */
+
+static int bus_open_transport(lssd_bus *b) {
+        int r;
+
+        if (b->ctx->args.simulate) {
+                r = lssd_simbus_new(b->config->bitrate, &b->sim);
+                if (r < 0)
+                        return r;
+                for (size_t i = 0; i < b->ctx->args.n_sim_slaves; i++) {
+                        const lssd_sim_slave *s = &b->ctx->args.sim_slaves[i];
+                        if (strcmp(s->ifname, b->ifname) != 0)
+                                continue;
+                        r = lssd_simbus_add_slave(b->sim, &s->id, s->node_id);
+                        if (r < 0)
+                                return r;
+                }
+                lssd_simbus_transport(b->sim, &b->transport);
+                b->link = LSS_LINK_UP;
+                return 0;
+        }
+
+        socketcan_config sc = {
+                .on_link_state = on_link_state,
+                .userdata = b,
+        };
+        r = socketcan_port_open(b->ifname, &sc, &b->port);
+        if (r < 0)
+                return r;
+        socketcan_port_transport(b->port, &b->transport);
+        b->link = socketcan_port_state(b->port);
+        return 0;
+}
+
+int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **ret) {
+        lss_timing_config tc;
+        lssd_bus *b;
+        int r;
+
+        b = calloc(1, sizeof(*b));
+        if (!b)
+                return -ENOMEM;
+        b->ctx = ctx;
+        b->io_fd = -1;
+        b->config = lssd_bus_config_dup(config);
+        if (!b->config) {
+                free(b);
+                return -ENOMEM;
+        }
+        lssd_job_queue_init(&b->queue, ctx->args.queue_max);
+
+        b->ifname = strdup(config->interface);
+        if (!b->ifname) {
+                r = -ENOMEM;
+                goto fail;
+        }
+        r = lssd_bus_path(b->ifname, &b->path);
+        if (r < 0)
+                goto fail;
+
+        bus_timing(b, &tc);
+        b->engine = lss_master_new(&tc);
+        if (!b->engine) {
+                r = -ENOMEM;
+                goto fail;
+        }
+        lss_master_set_progress(b->engine, on_engine_progress, b);
+
+        r = bus_open_transport(b);
+        if (r < 0) {
+                log_error("%s: failed to open: %s", b->ifname, strerror(-r));
+                goto fail;
+        }
+
+        r = sd_event_add_time(ctx->event, &b->timer_source, CLOCK_MONOTONIC, UINT64_MAX, 1, on_timer, b);
+        if (r < 0)
+                goto fail;
+        (void) sd_event_source_set_enabled(b->timer_source, SD_EVENT_OFF);
+        bus_update_io(b, true);
+
+        if (ctx->bus) {
+                r = sd_bus_add_object_vtable(ctx->bus, &b->slot, b->path, LSSD_BUS_IFACE, lssd_bus_vtable, b);
+                if (r < 0)
+                        goto fail;
+        }
+
+        b->state = lssd_bus_state(b);
+        b->bitrate = lssd_bus_bitrate(b);
+        log_info("%s: serving (%s, link %s)", b->ifname, b->sim ? "simulated" : "SocketCAN",
+                 lss_link_state_to_string(b->link));
+
+        /* a crash may have left slaves in configuration state */
+        if (b->link == LSS_LINK_UP)
+                bus_queue_reset(b, false);
+
+        *ret = b;
+        return 0;
+
+fail:
+        lssd_bus_free(b);
+        return r;
+}
+
+void lssd_bus_set_config(lssd_bus *b, const lssd_bus_config *config) {
+        lssd_bus_config *c = lssd_bus_config_dup(config);
+        if (!c) {
+                log_error("%s: out of memory, keeping the previous configuration", b->ifname);
+                return;
+        }
+        lssd_bus_config_free(b->config);
+        b->config = c;
+        bus_update_timing(b);
+        lssd_bus_refresh_devices(b);
+        bus_update_published(b);
+        lssd_bus_flush_changes(b);
+}
+
+/* Kicks off the queued first frames once everything is registered. */
+void lssd_bus_start(lssd_bus *b) {
+        if (b->ctx->bus && b->slot) {
+                int r = sd_bus_emit_object_added(b->ctx->bus, b->path);
+                if (r < 0)
+                        log_debug("%s: failed to announce the bus: %s", b->ifname, strerror(-r));
+        }
+        bus_process(b);
+}
+
+lssd_bus *lssd_bus_free(lssd_bus *b) {
+        lssd_job *j;
+
+        if (!b)
+                return NULL;
+
+        while ((j = lssd_job_queue_pop(&b->queue))) {
+                if (j->request)
+                        lssd_job_abort(j, LSSD_ERROR_CANCELLED, "The bus was removed");
+                lssd_job_free(j);
+        }
+        if (b->job) {
+                if (b->job->request)
+                        lssd_job_abort(b->job, LSSD_ERROR_CANCELLED, "The bus was removed");
+                b->job = lssd_job_free(b->job);
+        }
+
+        while (b->devices) {
+                lssd_device *d = b->devices;
+                b->devices = d->next;
+                if (b->ctx->bus && d->slot)
+                        (void) sd_bus_emit_object_removed(b->ctx->bus, d->path);
+                lssd_device_free(d);
+        }
+        if (b->ctx->bus && b->slot)
+                (void) sd_bus_emit_object_removed(b->ctx->bus, b->path);
+        b->slot = sd_bus_slot_unref(b->slot);
+
+        b->holder = sd_bus_track_unref(b->holder);
+        free(b->holder_name);
+        b->remove_source = sd_event_source_disable_unref(b->remove_source);
+        b->io_source = sd_event_source_disable_unref(b->io_source);
+        b->timer_source = sd_event_source_disable_unref(b->timer_source);
+        lss_transport_close(&b->transport);
+        b->port = NULL;
+        b->sim = NULL;
+        lss_master_free(b->engine);
+        lssd_bus_config_free(b->config);
+        free(b->path);
+        free(b->ifname);
+        free(b);
+        return NULL;
+}

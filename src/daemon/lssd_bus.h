@@ -1,0 +1,129 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* One CAN bus the daemon is the LSS master of: its transport, its engine, its
+ * job queue, its holder and its devices; published as an org.lssd.LSS1.Bus
+ * object. Exactly one LSS transaction at a time runs on a bus; buses run in
+ * parallel, each driven by its own fd and timer in the one event loop. */
+#pragma once
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <systemd/sd-bus.h>
+#include <systemd/sd-event.h>
+
+#include "can/rtnl_watch.h"
+#include "can/socketcan.h"
+#include "can/transport.h"
+#include "config/lssd_config.h"
+#include "daemon/lssd_context.h"
+#include "daemon/lssd_device.h"
+#include "daemon/lssd_job.h"
+#include "daemon/lssd_simbus.h"
+#include "lss/lss_master.h"
+
+/* Bus PropertiesChanged bookkeeping. */
+#define LSSD_BUS_CHANGED_STATE        (1u << 0)
+#define LSSD_BUS_CHANGED_BITRATE      (1u << 1)
+#define LSSD_BUS_CHANGED_JOB          (1u << 2)
+#define LSSD_BUS_CHANGED_PROGRESS     (1u << 3)
+#define LSSD_BUS_CHANGED_QUEUE_LENGTH (1u << 4)
+
+struct lssd_bus {
+        lssd_context *ctx;
+        char *ifname;
+        char *path;
+        lssd_bus_config *config;         /* own copy: a bus being removed outlives its configuration */
+
+        lss_transport transport;
+        socketcan_port *port;            /* behind transport, NULL when simulated */
+        lssd_simbus *sim;                /* behind transport when simulated */
+        sd_event_source *io_source;
+        int io_fd;
+        sd_event_source *timer_source;
+        lss_link_state link;
+        lss_bus_state bus_state;
+        uint64_t rx_dropped;
+        uint32_t link_bitrate;           /* from rtnetlink for real controllers, 0 otherwise */
+        bool link_virtual;               /* vcan/vxcan: frames take no time on the "wire" */
+        bool link_changed;               /* socketcan reported a change: handle it outside the callback */
+
+        lss_master *engine;
+        bool engine_running;             /* we started an operation and did not collect it yet */
+
+        lssd_job_queue queue;
+        lssd_job *job;                   /* running */
+        double progress;
+
+        sd_bus_track *holder;            /* Acquire() */
+        char *holder_name;
+
+        lssd_device *devices;
+        size_t n_devices;
+
+        sd_bus_slot *slot;
+        const char *state;               /* as published */
+        uint32_t bitrate;                /* as published */
+        unsigned changed;                /* LSSD_BUS_CHANGED_* not yet signalled */
+        bool processing;                 /* bus_process() is on the stack */
+        bool removing;                   /* dropped from the configuration: free when idle */
+        sd_event_source *remove_source;  /* frees the bus outside of its own callbacks */
+};
+
+/* Opens the transport (a missing interface is fine), registers the object
+ * and queues the first frame: switch-global waiting. */
+int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **ret);
+/* Announces the object and sends the queued first frame (call once the
+ * D-Bus objects are registered). */
+void lssd_bus_start(lssd_bus *b);
+lssd_bus *lssd_bus_free(lssd_bus *b);
+/* A new configuration (after reload): map, timing, bit rate. */
+void lssd_bus_set_config(lssd_bus *b, const lssd_bus_config *config);
+
+/* "down", "idle", "busy", "error-passive", "bus-off" */
+const char *lssd_bus_state(const lssd_bus *b);
+uint32_t lssd_bus_bitrate(const lssd_bus *b);
+const char *lssd_bus_job_name(const lssd_bus *b);
+bool lssd_bus_idle(const lssd_bus *b);
+
+/* May `sender` start a job now? Busy when stopping or held by somebody else,
+ * BusDown when the link is not up, and for raw services AccessDenied unless
+ * `sender` holds the bus. */
+int lssd_bus_check_available(lssd_bus *b, const char *sender, bool raw, sd_bus_error *error);
+/* Queues a job (LimitsExceeded when the queue is full) and starts it if the
+ * bus is idle. Takes over the job on success. */
+int lssd_bus_submit(lssd_bus *b, lssd_job *j, sd_bus_error *error);
+
+int lssd_bus_acquire(lssd_bus *b, sd_bus_message *m, sd_bus_error *error);
+int lssd_bus_release(lssd_bus *b, const char *sender, sd_bus_error *error);
+/* Cancels the running job (not the queued ones). */
+int lssd_bus_cancel(lssd_bus *b, const char *sender, sd_bus_error *error);
+
+/* rtnetlink told something about a link (any interface). */
+void lssd_bus_link_event(lssd_bus *b, const rtnl_link *link);
+/* Stopping or removal: cancel queue and running job, end with switch-global waiting. */
+void lssd_bus_stop(lssd_bus *b, const char *why);
+
+/* AssignNodeId of Bus and Device after reading and validating: authorize,
+ * refuse a node-ID another device answers to (Conflict), queue the job. */
+int lssd_bus_method_assign(lssd_bus *b, sd_bus_message *m, const lss_identity *id, uint8_t node_id,
+                           const lssd_assign_options *o, sd_bus_error *error);
+
+/* ---- devices ---- */
+lssd_device *lssd_bus_find_device(lssd_bus *b, const lss_identity *id);
+/* The device with this identity, created (with node_id) and announced if new. */
+int lssd_bus_get_device(lssd_bus *b, const lss_identity *id, uint8_t node_id, lssd_device **ret);
+/* Recomputes mapped node-IDs and states of every device and emits
+ * PropertiesChanged for what changed. */
+void lssd_bus_refresh_devices(lssd_bus *b);
+/* A present device other than `except` answering to node_id, NULL if none. */
+lssd_device *lssd_bus_device_with_node_id(lssd_bus *b, uint8_t node_id, const lss_identity *except);
+
+/* A deep copy of a bus configuration; NULL when out of memory. */
+lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c);
+lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c);
+
+/* ---- for the job code ---- */
+uint64_t lssd_bus_now(lssd_bus *b);      /* the transport's clock (CLOCK_MONOTONIC µs) */
+uint64_t lssd_realtime_us(void);         /* CLOCK_REALTIME µs, for LastSeen */
+/* Emits PropertiesChanged for LSSD_BUS_CHANGED_* bits set. */
+void lssd_bus_flush_changes(lssd_bus *b);

@@ -1,0 +1,368 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <systemd/sd-daemon.h>
+#include <unistd.h>
+
+#include "daemon/lssd_bus.h"
+#include "daemon/lssd_context.h"
+#include "daemon/lssd_errors.h"
+#include "daemon/lssd_log.h"
+#include "daemon/lssd_path.h"
+#include "daemon/lssd_vtables.h"
+
+void lssd_args_done(lssd_args *a) {
+        free(a->config_path);
+        for (size_t i = 0; i < a->n_buses; i++)
+                free(a->buses[i]);
+        free(a->buses);
+        free(a->sim_slaves);
+        *a = (lssd_args) { 0 };
+}
+
+int lssd_context_new(lssd_args *args, lssd_context **ret) {
+        lssd_context *ctx = calloc(1, sizeof(*ctx));
+        if (!ctx)
+                return -ENOMEM;
+        ctx->args = *args;
+        *args = (lssd_args) { 0 };
+        if (ctx->args.queue_max == 0)
+                ctx->args.queue_max = LSSD_QUEUE_MAX_DEFAULT;
+        lssd_auth_init(&ctx->auth);
+        *ret = ctx;
+        return 0;
+}
+
+lssd_context *lssd_context_free(lssd_context *ctx) {
+        if (!ctx)
+                return NULL;
+        for (size_t i = 0; i < ctx->n_buses; i++)
+                lssd_bus_free(ctx->buses[i]);
+        free(ctx->buses);
+        ctx->manager_slot = sd_bus_slot_unref(ctx->manager_slot);
+        ctx->object_manager_slot = sd_bus_slot_unref(ctx->object_manager_slot);
+        ctx->bus = sd_bus_flush_close_unref(ctx->bus);
+        ctx->rtnl_source = sd_event_source_disable_unref(ctx->rtnl_source);
+        ctx->stop_timeout = sd_event_source_disable_unref(ctx->stop_timeout);
+        rtnl_watch_free(ctx->rtnl);
+        sd_event_unref(ctx->event);
+        lssd_config_free(ctx->config);
+        free(ctx->config_path);
+        lssd_args_done(&ctx->args);
+        free(ctx);
+        return NULL;
+}
+
+/* ---- configuration ---- */
+
+static const char *config_file(const lssd_context *ctx) {
+        if (ctx->args.config_path)
+                return ctx->args.config_path;
+        if (access(LSSD_DEFAULT_CONFIG, F_OK) == 0)
+                return LSSD_DEFAULT_CONFIG;
+        return NULL;
+}
+
+int lssd_context_read_config(lssd_context *ctx, lssd_config **ret, lssd_diag *diag) {
+        const char *path = config_file(ctx);
+        lssd_config *c = NULL;
+        int r;
+
+        if (path)
+                r = lssd_config_load_file(path, &c, diag);
+        else
+                r = lssd_config_new(&c);
+        if (r < 0)
+                return r;
+
+        for (size_t i = 0; i < ctx->args.n_buses; i++) {
+                const char *name = ctx->args.buses[i];
+                if (lssd_config_find_bus(c, name))
+                        continue; /* the file says more about it */
+                lssd_bus_config *b = NULL;
+                r = lssd_config_add_default_bus(c, name, &b);
+                if (r >= 0 && ctx->args.lss_timeout_ms > 0)
+                        b->lss_timeout_ms = ctx->args.lss_timeout_ms;
+                if (r < 0) {
+                        lssd_diag_add(diag, LSSD_DIAG_ERROR, "--bus %s: %s", name,
+                                      r == -EINVAL ? "invalid interface name" : strerror(-r));
+                        lssd_config_free(c);
+                        return r;
+                }
+        }
+        *ret = c;
+        return 0;
+}
+
+static void log_diag(const lssd_diag *d) {
+        for (size_t i = 0; i < d->n_messages; i++)
+                lssd_log(d->messages[i].severity == LSSD_DIAG_ERROR ? LOG_ERR : LOG_WARNING, "%s",
+                         d->messages[i].text);
+        if (d->n_dropped > 0)
+                log_warning("(%zu more configuration messages not shown)", d->n_dropped);
+}
+
+static int context_add_bus(lssd_context *ctx, const lssd_bus_config *c) {
+        lssd_bus **a = realloc(ctx->buses, (ctx->n_buses + 1) * sizeof(*a));
+        if (!a)
+                return -ENOMEM;
+        ctx->buses = a;
+        lssd_bus *b;
+        int r = lssd_bus_new(ctx, c, &b);
+        if (r < 0)
+                return r;
+        ctx->buses[ctx->n_buses++] = b;
+        char desc[LSSD_BUS_DESCRIBE_MAX];
+        log_info("%s", lssd_bus_config_describe(c, desc, sizeof(desc)));
+        lssd_bus_start(b);
+        return 0;
+}
+
+int lssd_context_apply_config(lssd_context *ctx, lssd_config *config) {
+        bool changed = false;
+        int ret = 0;
+
+        for (size_t i = 0; i < ctx->n_buses; i++) {
+                lssd_bus *b = ctx->buses[i];
+                const lssd_bus_config *c = lssd_config_find_bus(config, b->ifname);
+                if (c) {
+                        if (b->removing) {
+                                b->removing = false;
+                                changed = true;
+                        }
+                        lssd_bus_set_config(b, c);
+                } else if (!b->removing) {
+                        log_info("%s: no longer in the configuration, removing", b->ifname);
+                        b->removing = true;
+                        changed = true;
+                        lssd_bus_stop(b, "The bus was removed from the configuration");
+                }
+        }
+
+        for (size_t i = 0; i < config->n_buses; i++) {
+                const lssd_bus_config *c = &config->buses[i];
+                if (lssd_context_find_bus(ctx, c->interface))
+                        continue;
+                int r = context_add_bus(ctx, c);
+                if (r < 0) {
+                        log_error("%s: failed to add the bus: %s", c->interface, strerror(-r));
+                        if (ret == 0)
+                                ret = r;
+                        continue;
+                }
+                changed = true;
+        }
+
+        lssd_config_free(ctx->config);
+        ctx->config = config;
+        if (changed)
+                lssd_context_emit_buses_changed(ctx);
+        return ret;
+}
+
+int lssd_context_reload(lssd_context *ctx, sd_bus_error *error) {
+        lssd_diag diag = LSSD_DIAG_INIT;
+        lssd_config *c = NULL;
+        const char *path = config_file(ctx);
+        int r;
+
+        log_info("Reloading the configuration%s%s", path ? " from " : "", path ? path : "");
+        r = lssd_context_read_config(ctx, &c, &diag);
+        log_diag(&diag);
+        if (r < 0) {
+                const char *first = "cannot be read";
+                for (size_t i = 0; i < diag.n_messages; i++)
+                        if (diag.messages[i].severity == LSSD_DIAG_ERROR) {
+                                first = diag.messages[i].text;
+                                break;
+                        }
+                log_error("The new configuration is bad, keeping the previous one");
+                r = sd_bus_error_setf(error, LSSD_ERROR_INVALID_FILE_CONTENT,
+                                      "Configuration %s: %s (%zu error%s); the previous configuration stays",
+                                      path ? path : "(command line)", first, diag.n_errors,
+                                      diag.n_errors == 1 ? "" : "s");
+                lssd_diag_clear(&diag);
+                return r;
+        }
+        lssd_diag_clear(&diag);
+
+        r = lssd_context_apply_config(ctx, c);
+        if (r < 0)
+                return sd_bus_error_setf(error, LSSD_ERROR_BUS_DOWN,
+                                         "The configuration was loaded but a bus could not be opened: %s",
+                                         strerror(-r));
+        lssd_context_notify_status(ctx, false);
+        return 0;
+}
+
+/* ---- buses ---- */
+
+lssd_bus *lssd_context_find_bus(lssd_context *ctx, const char *ifname) {
+        for (size_t i = 0; i < ctx->n_buses; i++)
+                if (strcmp(ctx->buses[i]->ifname, ifname) == 0)
+                        return ctx->buses[i];
+        return NULL;
+}
+
+void lssd_context_bus_removed(lssd_context *ctx, lssd_bus *b) {
+        for (size_t i = 0; i < ctx->n_buses; i++)
+                if (ctx->buses[i] == b) {
+                        memmove(ctx->buses + i, ctx->buses + i + 1, (ctx->n_buses - i - 1) * sizeof(*ctx->buses));
+                        ctx->n_buses--;
+                        break;
+                }
+        log_info("%s: removed", b->ifname);
+        lssd_bus_free(b);
+        lssd_context_emit_buses_changed(ctx);
+        lssd_context_notify_status(ctx, false);
+}
+
+void lssd_context_emit_buses_changed(lssd_context *ctx) {
+        if (!ctx->bus || !ctx->manager_slot)
+                return;
+        int r = sd_bus_emit_properties_changed(ctx->bus, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE, "Buses", NULL);
+        if (r < 0)
+                log_debug("Failed to emit PropertiesChanged for Buses: %s", strerror(-r));
+}
+
+/* ---- link watching ---- */
+
+static void on_rtnl_link(const rtnl_link *link, void *userdata) {
+        lssd_context *ctx = userdata;
+        for (size_t i = 0; i < ctx->n_buses; i++)
+                lssd_bus_link_event(ctx->buses[i], link);
+}
+
+static int on_rtnl_io(sd_event_source *s, int fd, uint32_t revents, void *userdata) {
+        lssd_context *ctx = userdata;
+        int r = rtnl_watch_process(ctx->rtnl);
+        if (r < 0)
+                log_warning("Failed to read link events: %s", strerror(-r));
+        return 0;
+}
+
+int lssd_context_open_rtnl(lssd_context *ctx) {
+        int r;
+
+        if (ctx->args.simulate)
+                return 0;
+        r = rtnl_watch_new(NULL, on_rtnl_link, ctx, &ctx->rtnl);
+        if (r < 0)
+                return log_error_errno(r, "Failed to watch network links");
+        r = sd_event_add_io(ctx->event, &ctx->rtnl_source, rtnl_watch_fd(ctx->rtnl), EPOLLIN, on_rtnl_io, ctx);
+        if (r < 0)
+                return log_error_errno(r, "Failed to watch network links");
+        return 0;
+}
+
+/* Current link states, once the buses exist (events from now on come from the watch). */
+int lssd_context_dump_links(lssd_context *ctx) {
+        if (!ctx->rtnl)
+                return 0;
+        int r = rtnl_dump_links(NULL, on_rtnl_link, ctx);
+        if (r < 0)
+                return log_warning_errno(r, "Failed to read the state of the network links");
+        return 0;
+}
+
+/* ---- D-Bus ---- */
+
+int lssd_context_connect_bus(lssd_context *ctx) {
+        int r;
+
+        r = sd_bus_open_system(&ctx->bus);
+        if (r < 0)
+                return log_error_errno(r, "Failed to connect to the system bus");
+        (void) sd_bus_set_description(ctx->bus, "lssd");
+        r = sd_bus_attach_event(ctx->bus, ctx->event, SD_EVENT_PRIORITY_NORMAL);
+        if (r < 0)
+                return log_error_errno(r, "Failed to attach the bus to the event loop");
+        /* without the bus nobody can reach us: exit and let systemd restart us */
+        r = sd_bus_set_exit_on_disconnect(ctx->bus, true);
+        if (r < 0)
+                return log_error_errno(r, "Failed to set exit-on-disconnect");
+        r = sd_bus_add_object_manager(ctx->bus, &ctx->object_manager_slot, LSSD_ROOT_PATH);
+        if (r < 0)
+                return log_error_errno(r, "Failed to add the object manager");
+        r = sd_bus_add_object_vtable(ctx->bus, &ctx->manager_slot, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE,
+                                     lssd_manager_vtable, ctx);
+        if (r < 0)
+                return log_error_errno(r, "Failed to register the manager object");
+        return 0;
+}
+
+int lssd_context_request_name(lssd_context *ctx) {
+        int r = sd_bus_request_name(ctx->bus, LSSD_BUS_NAME, 0);
+        if (r < 0)
+                return log_error_errno(r, "Failed to own the name %s", LSSD_BUS_NAME);
+        return 0;
+}
+
+/* ---- stopping ---- */
+
+static void context_exit(lssd_context *ctx) {
+        if (sd_event_get_state(ctx->event) == SD_EVENT_FINISHED)
+                return;
+        if (ctx->bus) {
+                int r = sd_bus_release_name(ctx->bus, LSSD_BUS_NAME);
+                if (r < 0)
+                        log_debug("Failed to release %s: %s", LSSD_BUS_NAME, strerror(-r));
+                (void) sd_bus_flush(ctx->bus);
+        }
+        log_info("Stopped");
+        (void) sd_event_exit(ctx->event, 0);
+}
+
+static int on_stop_timeout(sd_event_source *s, uint64_t usec, void *userdata) {
+        lssd_context *ctx = userdata;
+        log_warning("Buses did not become idle in time, exiting anyway");
+        context_exit(ctx);
+        return 0;
+}
+
+void lssd_context_stop(lssd_context *ctx) {
+        if (ctx->stopping)
+                return;
+        log_info("Stopping: cancelling jobs, switching every slave to waiting");
+        (void) sd_notify(0, "STOPPING=1\nSTATUS=Stopping: switching every slave to waiting");
+        for (size_t i = 0; i < ctx->n_buses; i++)
+                lssd_bus_stop(ctx->buses[i], "lssd is stopping");
+        ctx->stopping = true;
+
+        uint64_t now;
+        if (sd_event_now(ctx->event, CLOCK_MONOTONIC, &now) >= 0)
+                (void) sd_event_add_time(ctx->event, &ctx->stop_timeout, CLOCK_MONOTONIC,
+                                         now + LSSD_STOP_TIMEOUT_USEC, 0, on_stop_timeout, ctx);
+        lssd_context_check_stopped(ctx);
+}
+
+void lssd_context_check_stopped(lssd_context *ctx) {
+        if (!ctx->stopping)
+                return;
+        for (size_t i = 0; i < ctx->n_buses; i++)
+                if (!lssd_bus_idle(ctx->buses[i]))
+                        return;
+        context_exit(ctx);
+}
+
+void lssd_context_notify_status(lssd_context *ctx, bool ready) {
+        char status[512];
+        size_t n = 0;
+        size_t served = 0;
+
+        for (size_t i = 0; i < ctx->n_buses; i++)
+                if (!ctx->buses[i]->removing)
+                        served++;
+        n += (size_t) snprintf(status, sizeof(status), "Serving %zu bus%s", served, served == 1 ? "" : "es");
+        for (size_t i = 0; i < ctx->n_buses && n < sizeof(status); i++) {
+                const lssd_bus *b = ctx->buses[i];
+                if (b->removing)
+                        continue;
+                n += (size_t) snprintf(status + n, sizeof(status) - n, "%s %s (%s)", i == 0 ? ":" : ",", b->ifname,
+                                       lssd_bus_state(b));
+        }
+        (void) sd_notifyf(0, "%sSTATUS=%s", ready ? "READY=1\n" : "", status);
+}

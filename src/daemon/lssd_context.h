@@ -1,0 +1,97 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The daemon's one context: event loop, D-Bus connection, configuration,
+ * link watcher and the buses. lssd_context_free() frees it all. */
+#pragma once
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <systemd/sd-bus.h>
+#include <systemd/sd-event.h>
+
+#include "can/rtnl_watch.h"
+#include "config/lssd_config.h"
+#include "daemon/lssd_auth.h"
+
+#define LSSD_DEFAULT_CONFIG   "/etc/lssd/lssd.conf"
+#define LSSD_QUEUE_MAX_DEFAULT 128u
+#define LSSD_STOP_TIMEOUT_USEC (5u * 1000000u)
+
+typedef struct lssd_bus lssd_bus;
+
+/* An in-memory slave for `--simulate` (tests and demos without SocketCAN). */
+typedef struct lssd_sim_slave {
+        char ifname[16];
+        lss_identity id;
+        uint8_t node_id;
+} lssd_sim_slave;
+
+/* What the command line asked for. */
+typedef struct lssd_args {
+        char *config_path;         /* NULL: the default file if it exists */
+        bool config_explicit;      /* --config given: the file must exist */
+        char **buses;              /* --bus, in order */
+        size_t n_buses;
+        lssd_sim_slave *sim_slaves;
+        size_t n_sim_slaves;
+        bool simulate;             /* every bus is an in-memory one */
+        bool check_config;
+        size_t queue_max;
+        unsigned lss_timeout_ms;   /* --lss-timeout for --bus buses, 0 = the default */
+} lssd_args;
+
+void lssd_args_done(lssd_args *a);
+
+typedef struct lssd_context {
+        sd_event *event;
+        sd_bus *bus;
+        sd_bus_slot *manager_slot, *object_manager_slot;
+        rtnl_watch *rtnl;
+        sd_event_source *rtnl_source;
+        sd_event_source *stop_timeout;
+
+        lssd_auth auth;
+        lssd_args args;            /* owned copy */
+        char *config_path;         /* the file in use, NULL when none */
+        lssd_config *config;       /* file + --bus buses; the buses point into it */
+
+        lssd_bus **buses;
+        size_t n_buses;
+        uint64_t next_job_id;
+        bool stopping;
+} lssd_context;
+
+/* Takes over `args` (it is zeroed). */
+int lssd_context_new(lssd_args *args, lssd_context **ret);
+lssd_context *lssd_context_free(lssd_context *ctx);
+
+/* Reads the configuration file (if any) and adds the --bus buses. Messages go
+ * to `diag`. Does not touch the buses. */
+int lssd_context_read_config(lssd_context *ctx, lssd_config **ret, lssd_diag *diag);
+/* Makes `config` the one in force: new buses are created, gone ones removed,
+ * the others get their new map. Takes over `config`. */
+int lssd_context_apply_config(lssd_context *ctx, lssd_config *config);
+/* SIGHUP and ReloadConfig(): the last good configuration stays when the new
+ * one is bad (error says why). */
+int lssd_context_reload(lssd_context *ctx, sd_bus_error *error);
+
+int lssd_context_open_rtnl(lssd_context *ctx);
+/* Feeds the current state of every link to the buses. */
+int lssd_context_dump_links(lssd_context *ctx);
+int lssd_context_connect_bus(lssd_context *ctx);
+int lssd_context_request_name(lssd_context *ctx);
+
+lssd_bus *lssd_context_find_bus(lssd_context *ctx, const char *ifname);
+/* Called by a bus that was being removed and is idle now. */
+void lssd_context_bus_removed(lssd_context *ctx, lssd_bus *b);
+void lssd_context_emit_buses_changed(lssd_context *ctx);
+
+/* SIGTERM/SIGINT: stop taking jobs, cancel what is queued, finish or cancel
+ * the running step, switch every slave back to waiting, release the name,
+ * exit. */
+void lssd_context_stop(lssd_context *ctx);
+/* A bus went idle: finish stopping when all are. */
+void lssd_context_check_stopped(lssd_context *ctx);
+
+/* Ready/status line for sd_notify. */
+void lssd_context_notify_status(lssd_context *ctx, bool ready);

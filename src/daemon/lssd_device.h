@@ -1,0 +1,51 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* What the daemon knows about one LSS slave on one bus; published as an
+ * org.lssd.LSS1.Device object. Device objects stay while their bus exists;
+ * a device a later scan should have found but did not is "missing". */
+#pragma once
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <systemd/sd-bus.h>
+
+#include "lss/lss_proto.h"
+
+typedef struct lssd_bus lssd_bus;
+typedef struct lssd_device lssd_device;
+
+/* PropertiesChanged bookkeeping. */
+#define LSSD_DEVICE_CHANGED_NODE_ID        (1u << 0)
+#define LSSD_DEVICE_CHANGED_MAPPED_NODE_ID (1u << 1)
+#define LSSD_DEVICE_CHANGED_STATE          (1u << 2)
+#define LSSD_DEVICE_CHANGED_LAST_SEEN      (1u << 3)
+
+struct lssd_device {
+        lssd_bus *bus;
+        lssd_device *next;
+        lss_identity id;
+        char *path;
+        uint8_t node_id;        /* last known; 0xFF non-configured */
+        uint8_t mapped_node_id; /* from the bus's map; 0 = not in the map */
+        bool missing;           /* a scan that covers it did not find it */
+        bool assigned;          /* its node-ID came from this daemon (AssignNodeId) */
+        const char *state;      /* as published */
+        uint64_t last_seen;     /* µs, CLOCK_REALTIME; 0 = never */
+        unsigned changed;       /* LSSD_DEVICE_CHANGED_* not yet signalled */
+        sd_bus_slot *slot;
+};
+
+/* The State property:
+ *   missing         a scan that covers it did not find it
+ *   non-configured  node-ID 0xFF
+ *   conflict        another present device on the bus has the same node-ID
+ *   assigned        it has the node-ID the map (or an AssignNodeId call) gave
+ *   mismatch        it is in the map with another node-ID
+ *   configured      it has a node-ID and is not in the map */
+const char *lssd_device_state(uint8_t node_id, uint8_t mapped_node_id, bool missing, bool conflict,
+                              bool assigned);
+
+int lssd_device_new(lssd_bus *bus, const char *ifname, const lss_identity *id, lssd_device **ret);
+lssd_device *lssd_device_free(lssd_device *d);
+
+/* "vendor:product:revision:serial" as 8 hex digits each, for logs; buf >= 36. */
+const char *lssd_identity_format(const lss_identity *id, char *buf, size_t size);

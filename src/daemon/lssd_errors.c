@@ -1,0 +1,94 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <errno.h>
+#include <stdio.h>
+
+#include "daemon/lssd_errors.h"
+
+const sd_bus_error_map lssd_error_map[] = {
+        SD_BUS_ERROR_MAP(LSSD_ERROR_NO_RESPONSE, ETIMEDOUT),
+        SD_BUS_ERROR_MAP(LSSD_ERROR_REJECTED, EREMOTEIO),
+        SD_BUS_ERROR_MAP(LSSD_ERROR_BUSY, EBUSY),
+        SD_BUS_ERROR_MAP(LSSD_ERROR_BUS_DOWN, ENETDOWN),
+        SD_BUS_ERROR_MAP(LSSD_ERROR_BUS_OFF, ENOLINK),
+        SD_BUS_ERROR_MAP(LSSD_ERROR_NOT_FOUND, ENXIO),
+        SD_BUS_ERROR_MAP(LSSD_ERROR_CONFLICT, EADDRINUSE),
+        SD_BUS_ERROR_MAP(LSSD_ERROR_CANCELLED, ECANCELED),
+        SD_BUS_ERROR_MAP(LSSD_ERROR_NOT_SUPPORTED, EOPNOTSUPP),
+        SD_BUS_ERROR_MAP(LSSD_ERROR_LIMITS_EXCEEDED, ENOBUFS),
+        SD_BUS_ERROR_MAP_END
+};
+
+const char *lssd_service_to_string(lssd_service s) {
+        static const char *const names[_LSSD_SERVICE_MAX] = {
+                [LSSD_SERVICE_CONFIGURE_NODE_ID] = "Configure Node-ID",
+                [LSSD_SERVICE_CONFIGURE_BIT_TIMING] = "Configure Bit Timing",
+                [LSSD_SERVICE_STORE] = "Store Configuration",
+        };
+        return (unsigned) s < _LSSD_SERVICE_MAX ? names[s] : NULL;
+}
+
+const char *lssd_lss_error_meaning(lssd_service s, uint8_t err) {
+        if (err == 0)
+                return "success";
+        if (err == 255)
+                return "manufacturer-specific";
+        switch (s) {
+        case LSSD_SERVICE_CONFIGURE_NODE_ID:
+                return err == 1 ? "node-ID out of range" : "reserved";
+        case LSSD_SERVICE_CONFIGURE_BIT_TIMING:
+                return err == 1 ? "bit rate not supported" : "reserved";
+        case LSSD_SERVICE_STORE:
+                return err == 1 ? "store not supported" : err == 2 ? "storage media access error" : "reserved";
+        default:
+                return "reserved";
+        }
+}
+
+static const struct {
+        const char *error;
+        const char *result;
+} status_table[] = {
+        [LSS_OK] = { NULL, "done" },
+        [LSS_E_NO_RESPONSE] = { LSSD_ERROR_NO_RESPONSE, "no-response" },
+        [LSS_E_REJECTED] = { LSSD_ERROR_REJECTED, "rejected" },
+        [LSS_E_CONFLICT] = { LSSD_ERROR_CONFLICT, "conflict" },
+        [LSS_E_NOT_FOUND] = { LSSD_ERROR_NOT_FOUND, "not-found" },
+        [LSS_E_BUS_DOWN] = { LSSD_ERROR_BUS_DOWN, "bus-down" },
+        [LSS_E_BUS_OFF] = { LSSD_ERROR_BUS_OFF, "bus-off" },
+        [LSS_E_CANCELLED] = { LSSD_ERROR_CANCELLED, "cancelled" },
+        [LSS_E_INVALID] = { SD_BUS_ERROR_INVALID_ARGS, "invalid" },
+        /* the assignment went out but no boot-up confirmed it */
+        [LSS_E_VERIFY] = { LSSD_ERROR_NO_RESPONSE, "not-verified" },
+        /* several slaves disturbed each other's answers */
+        [LSS_E_INCOMPLETE] = { LSSD_ERROR_CONFLICT, "incomplete" },
+};
+
+const char *lssd_status_to_error_name(enum lss_status s) {
+        if ((unsigned) s >= sizeof(status_table) / sizeof(status_table[0]))
+                return LSSD_ERROR_NO_RESPONSE;
+        return status_table[s].error;
+}
+
+const char *lssd_status_to_result(enum lss_status s) {
+        if ((unsigned) s >= sizeof(status_table) / sizeof(status_table[0]))
+                return "failed";
+        return status_table[s].result;
+}
+
+int lssd_error_from_result(sd_bus_error *error, const lss_result *r, lssd_service service, const char *prefix) {
+        const char *name = lssd_status_to_error_name(r->status);
+
+        if (!name) /* not a failure: callers should not get here */
+                name = LSSD_ERROR_NO_RESPONSE;
+        if (!prefix)
+                prefix = "";
+
+        if (r->status == LSS_E_REJECTED && lssd_service_to_string(service))
+                return sd_bus_error_setf(error, name, "%s%s rejected by the slave: error %u (%s), spec %u", prefix,
+                                         lssd_service_to_string(service), r->err,
+                                         lssd_lss_error_meaning(service, r->err), r->spec);
+
+        if (r->message[0])
+                return sd_bus_error_setf(error, name, "%s%s", prefix, r->message);
+        return sd_bus_error_setf(error, name, "%s%s", prefix, lssd_status_to_result(r->status));
+}

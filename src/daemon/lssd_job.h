@@ -1,0 +1,86 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Jobs and the bounded FIFO each bus runs them from. A job is one atomic
+ * piece of work on one bus: one or more engine operations in a row, never
+ * interleaved with another job's frames. Jobs from D-Bus keep the request
+ * message and are answered when they end (deferred replies). */
+#pragma once
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <systemd/sd-bus.h>
+
+#include "daemon/lssd_options.h"
+#include "daemon/lssd_raw.h"
+#include "lss/lss_master.h"
+
+typedef enum lssd_job_type {
+        LSSD_JOB_RESET,   /* internal: switch-global waiting (start, link up, release, stop) */
+        LSSD_JOB_SCAN,    /* Scan(): fastscan enumeration + slowscan of vendor/product pairs */
+        LSSD_JOB_ASSIGN,  /* AssignNodeId() of Bus or Device */
+        LSSD_JOB_RAW,     /* one raw service of the bus holder */
+        LSSD_JOB_EXECUTE, /* Execute(): raw services in a row, then switch-global waiting */
+        _LSSD_JOB_TYPE_MAX,
+} lssd_job_type;
+
+typedef struct lssd_vendor_product {
+        uint32_t vendor, product;
+} lssd_vendor_product;
+
+typedef struct lssd_job lssd_job;
+struct lssd_job {
+        lssd_job_type type;
+        uint64_t id;                 /* per daemon, for logs */
+        sd_bus_message *request;     /* NULL for internal jobs */
+        char *sender;                /* unique name of the caller; NULL for internal jobs */
+        lssd_job *prev, *next;       /* queue links */
+
+        const char *result;          /* how it ended: "done", "no-response", ... (JobFinished) */
+        unsigned stage;              /* index of the engine operation running now */
+        unsigned n_stages;           /* how many it will take (for Progress) */
+
+        /* RAW, EXECUTE */
+        lssd_raw_step *steps;
+        size_t n_steps;
+        sd_bus_message *reply;       /* EXECUTE: results collected so far */
+        sd_bus_error error;          /* EXECUTE: the failure, answered after the final switch to waiting */
+
+        /* ASSIGN */
+        lss_identity identity;
+        uint8_t node_id;
+        lssd_assign_options assign;
+
+        /* SCAN */
+        lssd_vendor_product *pairs;
+        size_t n_pairs;
+        lss_device *found;           /* merged results of all stages */
+        size_t n_found;
+        bool scan_incomplete;        /* a stage failed: devices not found are not "missing" */
+};
+
+/* "Reset", "Scan", "AssignNodeId", the raw method name, "Execute". */
+const char *lssd_job_name(const lssd_job *j);
+
+/* A new job; request (may be NULL) is referenced, its sender copied. */
+int lssd_job_new(lssd_job_type type, sd_bus_message *request, lssd_job **ret);
+lssd_job *lssd_job_free(lssd_job *j);
+
+/* Adds a vendor/product pair to a scan job unless it is there. */
+int lssd_job_add_pair(lssd_job *j, uint32_t vendor, uint32_t product);
+/* Merges a device into a scan job's results: a later answer for the same
+ * identity replaces the node-ID. */
+int lssd_job_add_found(lssd_job *j, const lss_device *d);
+
+typedef struct lssd_job_queue {
+        lssd_job *head, *tail;
+        size_t n;
+        size_t max; /* bound for jobs from D-Bus; internal jobs always fit */
+} lssd_job_queue;
+
+void lssd_job_queue_init(lssd_job_queue *q, size_t max);
+/* Appends. -ENOBUFS when the queue holds `max` jobs and `force` is false. */
+int lssd_job_queue_push(lssd_job_queue *q, lssd_job *j, bool force);
+/* Puts a job first (internal jobs that must precede everything queued). */
+void lssd_job_queue_push_front(lssd_job_queue *q, lssd_job *j);
+lssd_job *lssd_job_queue_pop(lssd_job_queue *q);
+void lssd_job_queue_remove(lssd_job_queue *q, lssd_job *j);

@@ -1,0 +1,421 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "daemon/lssd_errors.h"
+#include "daemon/lssd_jobs.h"
+#include "daemon/lssd_log.h"
+#include "daemon/lssd_path.h"
+
+/* Failing to send a reply only means the caller is gone: log it and go on. */
+static void reply_error(lssd_job *j, const sd_bus_error *e) {
+        if (!j->request)
+                return;
+        int r = sd_bus_reply_method_error(j->request, e);
+        if (r < 0)
+                log_debug("Failed to send error reply to %s: %s", j->sender ? j->sender : "?", strerror(-r));
+}
+
+static void reply_message(lssd_job *j, sd_bus_message *reply) {
+        int r = sd_bus_message_send(reply);
+        if (r < 0)
+                log_debug("Failed to send reply to %s: %s", j->sender ? j->sender : "?", strerror(-r));
+}
+
+static void reply_empty(lssd_job *j) {
+        if (!j->request)
+                return;
+        int r = sd_bus_reply_method_return(j->request, NULL);
+        if (r < 0)
+                log_debug("Failed to send reply to %s: %s", j->sender ? j->sender : "?", strerror(-r));
+}
+
+void lssd_job_abort(lssd_job *j, const char *error_name, const char *message) {
+        sd_bus_error e = SD_BUS_ERROR_NULL;
+        sd_bus_error_set(&e, error_name, message);
+        reply_error(j, &e);
+        sd_bus_error_free(&e);
+        j->result = error_name && strcmp(error_name, LSSD_ERROR_CANCELLED) == 0 ? "cancelled" : "failed";
+}
+
+/* An engine operation that could not even start (a bug, or out of memory). */
+static int job_start_failed(lssd_bus *b, lssd_job *j, int r) {
+        sd_bus_error e = SD_BUS_ERROR_NULL;
+        log_error("%s: failed to start %s: %s", b->ifname, lssd_job_name(j), strerror(-r));
+        sd_bus_error_set_errno(&e, r);
+        reply_error(j, &e);
+        sd_bus_error_free(&e);
+        j->result = "failed";
+        return 0;
+}
+
+/* ---- Reset: switch-global waiting ---- */
+
+static int run_reset(lssd_bus *b, lssd_job *j, const lss_result *r) {
+        if (!r) {
+                int k = lss_master_switch_global(b->engine, LSS_MODE_WAITING, lssd_bus_now(b));
+                return k < 0 ? job_start_failed(b, j, k) : 1;
+        }
+        j->result = lssd_status_to_result(r->status);
+        if (r->status != LSS_OK)
+                log_warning("%s: could not switch the slaves to waiting: %s", b->ifname,
+                            r->message[0] ? r->message : lssd_status_to_result(r->status));
+        else
+                log_debug("%s: all slaves switched to waiting", b->ifname);
+        return 0;
+}
+
+/* ---- raw services of the holder ---- */
+
+static bool sender_holds(lssd_bus *b, const lssd_job *j) {
+        return b->holder_name && j->sender && strcmp(b->holder_name, j->sender) == 0;
+}
+
+static int run_raw(lssd_bus *b, lssd_job *j, const lss_result *r) {
+        const lssd_raw_step *s = &j->steps[0];
+        char what[96];
+
+        if (!r) {
+                /* queued while held, but the holder let go before its turn */
+                if (!sender_holds(b, j)) {
+                        lssd_job_abort(j, LSSD_ERROR_CANCELLED, "The bus was released before this call ran");
+                        return 0;
+                }
+                int k = lssd_raw_step_start(s, b->engine, lssd_bus_now(b));
+                return k < 0 ? job_start_failed(b, j, k) : 1;
+        }
+
+        lssd_raw_step_describe(s, what, sizeof(what));
+        if (!lssd_raw_step_succeeded(s, r)) {
+                sd_bus_error e = SD_BUS_ERROR_NULL;
+                lssd_raw_step_error(s, r, NULL, &e);
+                log_info("%s: %s by %s: %s", b->ifname, what, j->sender ? j->sender : "?", e.message);
+                reply_error(j, &e);
+                sd_bus_error_free(&e);
+                j->result = lssd_status_to_result(r->status);
+                return 0;
+        }
+
+        log_info("%s: %s by %s: done", b->ifname, what, j->sender ? j->sender : "?");
+        j->result = "done";
+        if (!j->request)
+                return 0;
+        sd_bus_message *reply = NULL;
+        int k = sd_bus_message_new_method_return(j->request, &reply);
+        if (k >= 0)
+                k = lssd_raw_step_append_result(s, r, reply, false);
+        if (k >= 0)
+                reply_message(j, reply);
+        else
+                log_error("%s: failed to build the reply of %s: %s", b->ifname, what, strerror(-k));
+        sd_bus_message_unref(reply);
+        return 0;
+}
+
+/* ---- Execute: steps, then always switch-global waiting ---- */
+
+static int execute_start_stage(lssd_bus *b, lssd_job *j) {
+        uint64_t now = lssd_bus_now(b);
+        int k;
+        if (j->stage < j->n_steps)
+                k = lssd_raw_step_start(&j->steps[j->stage], b->engine, now);
+        else
+                k = lss_master_switch_global(b->engine, LSS_MODE_WAITING, now);
+        return k < 0 ? job_start_failed(b, j, k) : 1;
+}
+
+static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
+        int k;
+
+        if (!r) {
+                j->n_stages = (unsigned) j->n_steps + 1;
+                if (j->request) {
+                        k = sd_bus_message_new_method_return(j->request, &j->reply);
+                        if (k >= 0)
+                                k = sd_bus_message_open_container(j->reply, 'a', "v");
+                        if (k < 0)
+                                return job_start_failed(b, j, k);
+                }
+                return execute_start_stage(b, j);
+        }
+
+        if (j->stage < j->n_steps) {
+                const lssd_raw_step *s = &j->steps[j->stage];
+                if (lssd_raw_step_succeeded(s, r)) {
+                        if (j->reply) {
+                                k = lssd_raw_step_append_result(s, r, j->reply, true);
+                                if (k < 0)
+                                        sd_bus_error_set_errno(&j->error, k);
+                        }
+                        j->stage++;
+                } else {
+                        char prefix[64];
+                        snprintf(prefix, sizeof(prefix), "steps[%u] (%s): ", j->stage,
+                                 lssd_raw_op_to_string(s->op));
+                        lssd_raw_step_error(s, r, prefix, &j->error);
+                        j->result = lssd_status_to_result(r->status);
+                        j->stage = (unsigned) j->n_steps; /* straight to the final switch */
+                }
+                if (sd_bus_error_is_set(&j->error))
+                        j->stage = (unsigned) j->n_steps;
+                return execute_start_stage(b, j);
+        }
+
+        /* the final switch to waiting is done */
+        if (!sd_bus_error_is_set(&j->error) && r->status != LSS_OK) {
+                lssd_error_from_result(&j->error, r, _LSSD_SERVICE_MAX,
+                                       "Switching the slaves back to waiting failed: ");
+                j->result = lssd_status_to_result(r->status);
+        }
+
+        if (sd_bus_error_is_set(&j->error)) {
+                log_info("%s: Execute (%zu steps) by %s failed: %s", b->ifname, j->n_steps,
+                         j->sender ? j->sender : "?", j->error.message);
+                reply_error(j, &j->error);
+                if (!j->result)
+                        j->result = "failed";
+                return 0;
+        }
+
+        log_info("%s: Execute (%zu steps) by %s: done", b->ifname, j->n_steps, j->sender ? j->sender : "?");
+        j->result = "done";
+        if (j->reply) {
+                k = sd_bus_message_close_container(j->reply);
+                if (k >= 0)
+                        reply_message(j, j->reply);
+                else
+                        log_error("%s: failed to build the reply of Execute: %s", b->ifname, strerror(-k));
+        }
+        return 0;
+}
+
+/* ---- AssignNodeId ---- */
+
+static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
+        char ident[40];
+        lssd_identity_format(&j->identity, ident, sizeof(ident));
+
+        if (!r) {
+                unsigned flags = (j->assign.store ? LSS_ASSIGN_STORE : 0u) |
+                                 (j->assign.verify ? LSS_ASSIGN_VERIFY : 0u);
+                int k = lss_master_assign(b->engine, &j->identity, j->node_id, flags, lssd_bus_now(b));
+                return k < 0 ? job_start_failed(b, j, k) : 1;
+        }
+
+        if (r->status != LSS_OK) {
+                sd_bus_error e = SD_BUS_ERROR_NULL;
+                lssd_service service = strncmp(r->message, "Store", 5) == 0 ? LSSD_SERVICE_STORE
+                                                                              : LSSD_SERVICE_CONFIGURE_NODE_ID;
+                lssd_error_from_result(&e, r, service, NULL);
+                lssd_log_device(LOG_WARNING, b->ifname, &j->identity, j->node_id,
+                                "%s: AssignNodeId %s -> node %u failed: %s", b->ifname, ident, j->node_id,
+                                e.message);
+                reply_error(j, &e);
+                sd_bus_error_free(&e);
+                j->result = lssd_status_to_result(r->status);
+                /* the slave is not where we thought: it is not missing though, it did not answer a selective switch */
+                return 0;
+        }
+
+        lssd_device *d = NULL;
+        int k = lssd_bus_get_device(b, &j->identity, j->node_id, &d);
+        if (k >= 0) {
+                uint8_t old = r->node_id;
+                if (d->node_id != j->node_id)
+                        d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
+                d->node_id = j->node_id;
+                d->assigned = true;
+                d->missing = false;
+                d->last_seen = lssd_realtime_us();
+                d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
+                lssd_bus_refresh_devices(b);
+                if (r->changed && b->ctx->bus)
+                        (void) sd_bus_emit_signal(b->ctx->bus, b->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
+                                                  d->path, old, j->node_id);
+        } else
+                log_error("%s: failed to record device %s: %s", b->ifname, ident, strerror(-k));
+
+        lssd_log_device(LOG_NOTICE, b->ifname, &j->identity, j->node_id, "%s: device %s: node-ID %u -> %u%s%s",
+                        b->ifname, ident, r->node_id, j->node_id, r->changed ? "" : " (already set)",
+                        r->changed && j->assign.store ? ", stored" : "");
+        j->result = "done";
+        reply_empty(j);
+        return 0;
+}
+
+/* ---- Scan: fastscan enumeration, then slowscan per vendor/product pair ---- */
+
+static int scan_start_stage(lssd_bus *b, lssd_job *j) {
+        uint64_t now = lssd_bus_now(b);
+        int k;
+        if (j->stage == 0)
+                k = lss_master_enumerate(b->engine, NULL, now);
+        else {
+                const lssd_vendor_product *p = &j->pairs[j->stage - 1];
+                lss_identify_range range = {
+                        .vendor = p->vendor, .product = p->product,
+                        .rev_lo = 0, .rev_hi = UINT32_MAX,
+                        .serial_lo = 0, .serial_hi = UINT32_MAX,
+                };
+                k = lss_master_slowscan(b->engine, &range, now);
+        }
+        return k < 0 ? job_start_failed(b, j, k) : 1;
+}
+
+static int compare_devices(const void *a, const void *b) {
+        const lss_device *x = a, *y = b;
+        return lss_identity_compare(&x->id, &y->id);
+}
+
+static bool scan_covers(const lssd_job *j, const lssd_device *d) {
+        /* every non-configured slave answers the fastscan */
+        if (d->node_id == LSS_NODE_ID_UNCONFIGURED)
+                return true;
+        for (size_t i = 0; i < j->n_pairs; i++)
+                if (j->pairs[i].vendor == d->id.vendor && j->pairs[i].product == d->id.product)
+                        return true;
+        return false;
+}
+
+static void scan_publish(lssd_bus *b, lssd_job *j, uint64_t now_realtime) {
+        sd_bus *bus = b->ctx->bus;
+
+        /* who was not found although the scan would have */
+        if (!j->scan_incomplete)
+                for (lssd_device *d = b->devices; d; d = d->next) {
+                        bool found = false;
+                        for (size_t i = 0; i < j->n_found && !found; i++)
+                                found = lss_identity_equal(&j->found[i].id, &d->id);
+                        if (!found && !d->missing && scan_covers(j, d))
+                                d->missing = true;
+                }
+
+        for (size_t i = 0; i < j->n_found; i++) {
+                const lss_device *f = &j->found[i];
+                lssd_device *d = NULL;
+                char ident[40];
+                int k = lssd_bus_get_device(b, &f->id, f->node_id, &d);
+                if (k < 0) {
+                        log_error("%s: failed to record device %s: %s", b->ifname,
+                                  lssd_identity_format(&f->id, ident, sizeof(ident)), strerror(-k));
+                        continue;
+                }
+                if (d->node_id != f->node_id) {
+                        d->node_id = f->node_id;
+                        d->assigned = false;
+                        d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
+                }
+                d->missing = false;
+                d->last_seen = now_realtime;
+                d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
+        }
+        lssd_bus_refresh_devices(b);
+
+        if (!bus)
+                return;
+        for (size_t i = 0; i < j->n_found; i++) {
+                const lss_device *f = &j->found[i];
+                lssd_device *d = lssd_bus_find_device(b, &f->id);
+                if (d)
+                        (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "DeviceFound", "o", d->path);
+                if (!lssd_config_lookup_device(b->config, &f->id))
+                        (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu",
+                                                  f->id.vendor, f->id.product, f->id.revision, f->id.serial);
+        }
+}
+
+static void scan_log(lssd_bus *b, lssd_job *j) {
+        char line[900];
+        size_t n = 0;
+        n += (size_t) snprintf(line, sizeof(line), "%s: Scan: %zu device%s", b->ifname, j->n_found,
+                               j->n_found == 1 ? "" : "s");
+        for (size_t i = 0; i < j->n_found && n < sizeof(line); i++) {
+                char ident[40];
+                lssd_identity_format(&j->found[i].id, ident, sizeof(ident));
+                if (j->found[i].node_id == LSS_NODE_ID_UNCONFIGURED)
+                        n += (size_t) snprintf(line + n, sizeof(line) - n, "%s %s non-configured", i ? "," : ":",
+                                               ident);
+                else
+                        n += (size_t) snprintf(line + n, sizeof(line) - n, "%s %s node %u", i ? "," : ":", ident,
+                                               j->found[i].node_id);
+        }
+        log_info("%s", line);
+        for (size_t i = 0; i < j->n_found; i++) {
+                char ident[40];
+                lssd_log_device(LOG_DEBUG, b->ifname, &j->found[i].id, j->found[i].node_id, "%s: found %s node %u",
+                                b->ifname, lssd_identity_format(&j->found[i].id, ident, sizeof(ident)),
+                                j->found[i].node_id);
+        }
+}
+
+static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
+        if (!r) {
+                j->n_stages = (unsigned) j->n_pairs + 1;
+                return scan_start_stage(b, j);
+        }
+
+        for (size_t i = 0; i < r->n_devices; i++)
+                if (lssd_job_add_found(j, &r->devices[i]) < 0) {
+                        j->scan_incomplete = true;
+                        break;
+                }
+
+        if (r->status != LSS_OK) {
+                sd_bus_error e = SD_BUS_ERROR_NULL;
+                j->scan_incomplete = true;
+                scan_publish(b, j, lssd_realtime_us());
+                lssd_error_from_result(&e, r, _LSSD_SERVICE_MAX, "Scan: ");
+                log_warning("%s: %s", b->ifname, e.message);
+                reply_error(j, &e);
+                sd_bus_error_free(&e);
+                j->result = lssd_status_to_result(r->status);
+                return 0;
+        }
+
+        if (++j->stage <= j->n_pairs)
+                return scan_start_stage(b, j);
+
+        qsort(j->found, j->n_found, sizeof(*j->found), compare_devices);
+        scan_publish(b, j, lssd_realtime_us());
+        scan_log(b, j);
+        j->result = "done";
+
+        if (!j->request)
+                return 0;
+        sd_bus_message *reply = NULL;
+        int k = sd_bus_message_new_method_return(j->request, &reply);
+        if (k >= 0)
+                k = sd_bus_message_open_container(reply, 'a', "(uuuuy)");
+        for (size_t i = 0; k >= 0 && i < j->n_found; i++) {
+                const lss_device *f = &j->found[i];
+                k = sd_bus_message_append(reply, "(uuuuy)", f->id.vendor, f->id.product, f->id.revision, f->id.serial,
+                                          f->node_id);
+        }
+        if (k >= 0)
+                k = sd_bus_message_close_container(reply);
+        if (k >= 0)
+                reply_message(j, reply);
+        else
+                log_error("%s: failed to build the reply of Scan: %s", b->ifname, strerror(-k));
+        sd_bus_message_unref(reply);
+        return 0;
+}
+
+int lssd_job_run(lssd_bus *b, lssd_job *j, const lss_result *r) {
+        switch (j->type) {
+        case LSSD_JOB_RESET:
+                return run_reset(b, j, r);
+        case LSSD_JOB_SCAN:
+                return run_scan(b, j, r);
+        case LSSD_JOB_ASSIGN:
+                return run_assign(b, j, r);
+        case LSSD_JOB_RAW:
+                return run_raw(b, j, r);
+        case LSSD_JOB_EXECUTE:
+                return run_execute(b, j, r);
+        default:
+                return job_start_failed(b, j, -EINVAL);
+        }
+}

@@ -1,0 +1,60 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Decoding of `a{sv}` option arguments against a table of known keys.
+ * Unknown keys, keys given twice and values of the wrong type are refused
+ * with org.freedesktop.DBus.Error.InvalidArgs naming the argument, the key
+ * and what was wrong: a typo never goes unnoticed. */
+#pragma once
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <systemd/sd-bus.h>
+
+typedef struct lssd_option {
+        const char *key;
+        char type;        /* 'b' (bool), 'y' (uint8_t), 'q' (uint16_t), 'u' (uint32_t) */
+        size_t offset;    /* of the value in the target struct */
+        size_t seen;      /* offset of a bool set when the key was given, or LSSD_OPTION_NO_SEEN */
+} lssd_option;
+
+#define LSSD_OPTION_NO_SEEN SIZE_MAX
+#define LSSD_OPTION(k, t, type_, field) \
+        { .key = (k), .type = (t), .offset = offsetof(type_, field), .seen = LSSD_OPTION_NO_SEEN }
+#define LSSD_OPTION_SEEN(k, t, type_, field, seen_field) \
+        { .key = (k), .type = (t), .offset = offsetof(type_, field), .seen = offsetof(type_, seen_field) }
+#define LSSD_OPTION_END { .key = NULL }
+
+/* Reads one a{sv} from `m` into `target` (whose defaults the caller set).
+ * 0 on success; on failure `error` is set and a negative errno returned. */
+int lssd_options_read(sd_bus_message *m, const char *argument, const lssd_option *table, void *target,
+                      sd_bus_error *error);
+
+/* ---- the option sets of the API ---- */
+
+/* Scan(a{sv} options): `vendor` u and `product` u (both or neither) add a
+ * vendor/product pair to the slowscan. */
+typedef struct lssd_scan_options {
+        uint32_t vendor, product;
+        bool has_vendor, has_product;
+} lssd_scan_options;
+
+/* AssignNodeId(..., a{sv} options): `store` b (default true): Store
+ * Configuration after configuring; `verify` b (default true): wait for the
+ * boot-up at the new node-ID (resets a configured slave's communication). */
+typedef struct lssd_assign_options {
+        bool store, verify;
+} lssd_assign_options;
+
+/* Fastscan(a{sv} known): `vendor`, `product`, `revision`, `serial` (u) are
+ * confirmed in one step each instead of being scanned bit by bit. */
+typedef struct lssd_fastscan_options {
+        uint32_t value[4];
+        bool has[4];
+} lssd_fastscan_options;
+
+int lssd_scan_options_read(sd_bus_message *m, lssd_scan_options *ret, sd_bus_error *error);
+int lssd_assign_options_read(sd_bus_message *m, lssd_assign_options *ret, sd_bus_error *error);
+int lssd_fastscan_options_read(sd_bus_message *m, const char *argument, lssd_fastscan_options *ret,
+                               sd_bus_error *error);
+/* For methods that take no option yet (AutoAssign, SetBitrate): any key is refused. */
+int lssd_no_options_read(sd_bus_message *m, sd_bus_error *error);

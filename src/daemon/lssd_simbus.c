@@ -1,0 +1,152 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <errno.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "daemon/lssd_simbus.h"
+#include "sim/membus.h"
+
+struct lssd_simbus {
+        membus *bus;
+        uint64_t t0; /* CLOCK_MONOTONIC µs at virtual time 0 */
+};
+
+static uint64_t monotonic_us(void) {
+        struct timespec ts;
+        clock_gettime(CLOCK_MONOTONIC, &ts);
+        return (uint64_t) ts.tv_sec * 1000000u + (uint64_t) ts.tv_nsec / 1000u;
+}
+
+/* Run the simulation up to the real present. */
+static void catch_up(lssd_simbus *s) {
+        uint64_t now = monotonic_us();
+        if (now > s->t0 && now - s->t0 > membus_now(s->bus))
+                membus_advance(s->bus, now - s->t0);
+}
+
+static int sim_send(void *impl, const lss_frame *f) {
+        lssd_simbus *s = impl;
+        catch_up(s);
+        membus_master_send(s->bus, f);
+        return 0;
+}
+
+static int sim_recv(void *impl, lss_frame *f, uint64_t *rx_us) {
+        lssd_simbus *s = impl;
+        uint64_t t;
+        catch_up(s);
+        if (!membus_master_recv(s->bus, f, &t))
+                return 0;
+        *rx_us = t + s->t0;
+        return 1;
+}
+
+static int sim_get_fd(void *impl) {
+        return -1;
+}
+
+static uint64_t sim_now(void *impl) {
+        return monotonic_us();
+}
+
+static void sim_close(void *impl) {
+        lssd_simbus *s = impl;
+        if (!s)
+                return;
+        membus_free(s->bus);
+        free(s);
+}
+
+static const lss_transport_ops sim_ops = {
+        .send = sim_send,
+        .recv = sim_recv,
+        .get_fd = sim_get_fd,
+        .now = sim_now,
+        .status = NULL,
+        .close = sim_close,
+};
+
+/* LSSD_SIM_TRACE=1: every frame on the simulated wire to stderr, candump style. */
+static void trace_frame(void *ud, const lss_frame *f, uint64_t t_us) {
+        const lssd_simbus *s = ud;
+        char buf[64];
+        fprintf(stderr, "(%" PRIu64 ".%06" PRIu64 ") sim %s\n", (t_us + s->t0) / 1000000u, (t_us + s->t0) % 1000000u,
+                lss_frame_format(f, buf, sizeof(buf)));
+}
+
+int lssd_simbus_new(uint32_t bitrate, lssd_simbus **ret) {
+        lssd_simbus *s = calloc(1, sizeof(*s));
+        if (!s)
+                return -ENOMEM;
+        s->bus = membus_new(bitrate);
+        if (!s->bus) {
+                free(s);
+                return -ENOMEM;
+        }
+        s->t0 = monotonic_us();
+        if (getenv("LSSD_SIM_TRACE"))
+                membus_set_trace(s->bus, trace_frame, s);
+        *ret = s;
+        return 0;
+}
+
+int lssd_simbus_add_slave(lssd_simbus *s, const lss_identity *id, uint8_t node_id) {
+        lss_slave_faults faults;
+        lss_slave_faults_default(&faults);
+        /* a little latency, as real slaves have */
+        faults.latency_us = 500;
+        catch_up(s);
+        size_t i = membus_add_slave(s->bus, id, node_id, &faults);
+        if (i == SIZE_MAX)
+                return -ENOMEM;
+        lss_slave_power_on(membus_slave(s->bus, i), membus_now(s->bus));
+        return 0;
+}
+
+void lssd_simbus_transport(lssd_simbus *s, lss_transport *ret) {
+        *ret = (lss_transport) { .ops = &sim_ops, .impl = s };
+}
+
+uint64_t lssd_simbus_next_event(lssd_simbus *s) {
+        uint64_t t = membus_next_event(s->bus);
+        return t == UINT64_MAX ? UINT64_MAX : t + s->t0;
+}
+
+static int parse_u32(const char *s, uint32_t *ret) {
+        char *end;
+        errno = 0;
+        unsigned long long v = strtoull(s, &end, 0);
+        if (errno || end == s || *end || v > UINT32_MAX || s[0] == '-')
+                return -EINVAL;
+        *ret = (uint32_t) v;
+        return 0;
+}
+
+int lssd_sim_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id) {
+        char buf[128], *fields[7];
+        size_t n = 0;
+
+        if (!spec || strlen(spec) >= sizeof(buf))
+                return -EINVAL;
+        strcpy(buf, spec);
+        for (char *p = buf, *save = NULL, *t; n < 7 && (t = strtok_r(p, ":", &save)); p = NULL)
+                fields[n++] = t;
+        if (n < 5 || n > 6 || strlen(fields[0]) > 15)
+                return -EINVAL;
+
+        uint32_t v[5] = { 0, 0, 0, 0, LSS_NODE_ID_UNCONFIGURED };
+        for (size_t i = 1; i < n; i++)
+                if (parse_u32(fields[i], &v[i - 1]) < 0)
+                        return -EINVAL;
+        if (v[4] != LSS_NODE_ID_UNCONFIGURED && !lss_node_id_valid(v[4]))
+                return -EINVAL;
+
+        strcpy(ifname, fields[0]);
+        *id = (lss_identity) { .vendor = v[0], .product = v[1], .revision = v[2], .serial = v[3] };
+        *node_id = (uint8_t) v[4];
+        return 0;
+}

@@ -1,0 +1,25 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The config loader fed arbitrary text. */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "config/lssd_config.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+        char *text = malloc(size + 1);
+        if (!text)
+                return 0;
+        memcpy(text, data, size);
+        text[size] = 0;
+        lssd_config *c = NULL;
+        lssd_diag diag;
+        lssd_diag_init(&diag);
+        if (lssd_config_load_buffer(text, size, "fuzz.conf", &c, &diag) == 0)
+                lssd_config_free(c);
+        lssd_diag_clear(&diag);
+        free(text);
+        return 0;
+}
