@@ -282,7 +282,7 @@ static int run(int argc, char *argv[]) {
         if (r < 0)
                 goto finish;
 
-        lssd_context_notify_status(ctx, true);
+        lssd_context_notify_ready(ctx);
         log_info("Ready: serving %zu bus%s", ctx->n_buses, ctx->n_buses == 1 ? "" : "es");
 
         r = sd_event_loop(ctx->event);

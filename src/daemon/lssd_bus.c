@@ -244,7 +244,24 @@ static void bus_job_end(lssd_bus *b) {
         b->job = NULL;
         b->changed |= LSSD_BUS_CHANGED_JOB;
         set_progress(b, 0);
-        if (j->request && b->ctx->bus && b->slot)
+        if (j->type == LSSD_JOB_AUTO_ASSIGN && j->boot) {
+                /* finished or gave up: either way the boot pass is over */
+                char *text = NULL;
+                if (j->summary[0] && j->result && strcmp(j->result, "partial") != 0 &&
+                    strcmp(j->result, "done") != 0) {
+                        if (asprintf(&text, "%s: auto-assign gave up (%s)", b->ifname, j->result) < 0)
+                                text = NULL;
+                } else if (j->summary[0])
+                        text = strdup(j->summary);
+                else if (asprintf(&text, "%s: auto-assign %s", b->ifname, j->result ? j->result : "failed") < 0)
+                        text = NULL;
+                free(b->boot_status);
+                b->boot_status = text;
+                b->boot_pending = false;
+                lssd_context_boot_pass_done(b->ctx);
+        }
+        /* the boot pass has no caller but its end matters to everybody */
+        if ((j->request || j->type == LSSD_JOB_AUTO_ASSIGN) && b->ctx->bus && b->slot)
                 (void) sd_bus_emit_signal(b->ctx->bus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss", lssd_job_name(j),
                                           j->result ? j->result : "failed");
         lssd_job_free(j);
@@ -417,6 +434,33 @@ static void bus_queue_reset(lssd_bus *b, bool front) {
         b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
 }
 
+/* The boot pass goes right behind the switch to waiting at the head. */
+static void bus_queue_boot_pass(lssd_bus *b) {
+        lssd_job *j, *reset;
+
+        if (!b->boot_pending || b->removing || b->ctx->stopping)
+                return;
+        for (j = b->job; j; j = NULL)
+                if (j->type == LSSD_JOB_AUTO_ASSIGN && j->boot)
+                        return;
+        for (j = b->queue.head; j; j = j->next)
+                if (j->type == LSSD_JOB_AUTO_ASSIGN && j->boot)
+                        return;
+        if (lssd_job_new(LSSD_JOB_AUTO_ASSIGN, NULL, &j) < 0 || lssd_job_set_plan(j, b->config) < 0) {
+                lssd_job_free(j);
+                log_error("%s: out of memory queueing the auto-assign pass", b->ifname);
+                b->boot_pending = false;
+                return;
+        }
+        j->boot = true;
+        j->id = ++b->ctx->next_job_id;
+        reset = b->queue.head && b->queue.head->type == LSSD_JOB_RESET ? lssd_job_queue_pop(&b->queue) : NULL;
+        lssd_job_queue_push_front(&b->queue, j);
+        if (reset)
+                lssd_job_queue_push_front(&b->queue, reset);
+        b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
+}
+
 int lssd_bus_submit(lssd_bus *b, lssd_job *j, sd_bus_error *error) {
         if (lssd_job_queue_push(&b->queue, j, false) < 0)
                 return sd_bus_error_setf(error, LSSD_ERROR_LIMITS_EXCEEDED,
@@ -531,8 +575,10 @@ static void bus_after_link_change(lssd_bus *b) {
                 lss_master_on_bus_error(b->engine, LSS_E_BUS_DOWN, why, lssd_bus_now(b));
         }
         /* whatever happened while we could not talk: the first frame is switch-global waiting */
-        if (now_state == LSS_LINK_UP)
+        if (now_state == LSS_LINK_UP) {
                 bus_queue_reset(b, true);
+                bus_queue_boot_pass(b);
+        }
         bus_process(b);
 }
 
@@ -611,6 +657,9 @@ static uint8_t mapped_node_id(const lssd_bus *b, const lss_identity *id) {
 
 static const char *device_state(lssd_bus *b, const lssd_device *d) {
         bool conflict = lssd_bus_device_with_node_id(b, d->node_id, &d->id) != NULL;
+        /* not given its node-ID because another device answers to it: say so even while non-configured */
+        if (d->blocked && !d->missing)
+                return "conflict";
         return lssd_device_state(d->node_id, d->mapped_node_id, d->missing, conflict, d->assigned);
 }
 
@@ -783,6 +832,10 @@ int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **re
         /* a crash may have left slaves in configuration state */
         if (b->link == LSS_LINK_UP)
                 bus_queue_reset(b, false);
+        /* a bus that is not there yet gets its pass when the interface appears */
+        b->boot_pending = config->auto_assign && !ctx->started;
+        if (b->link == LSS_LINK_UP)
+                bus_queue_boot_pass(b);
 
         *ret = b;
         return 0;
@@ -854,6 +907,7 @@ lssd_bus *lssd_bus_free(lssd_bus *b) {
         b->sim = NULL;
         lss_master_free(b->engine);
         lssd_bus_config_free(b->config);
+        free(b->boot_status);
         free(b->path);
         free(b->ifname);
         free(b);

@@ -67,6 +67,9 @@ struct lssd_bus {
         bool processing;                 /* bus_process() is on the stack */
         bool removing;                   /* dropped from the configuration: free when idle */
         sd_event_source *remove_source;  /* frees the bus outside of its own callbacks */
+
+        bool boot_pending;               /* auto_assign: the boot pass has not ended yet */
+        char *boot_status;               /* how the boot pass ended, for STATUS= */
 };
 
 /* Opens the transport (a missing interface is fine), registers the object

@@ -125,15 +125,27 @@ int lssd_bus_method_assign(lssd_bus *b, sd_bus_message *m, const lss_identity *i
 
 static int method_auto_assign(sd_bus_message *m, void *userdata, sd_bus_error *error) {
         lssd_bus *b = userdata;
+        lssd_autoassign_options o;
+        lssd_job *j;
         int r;
 
-        r = lssd_no_options_read(m, error);
+        r = lssd_autoassign_options_read(m, &o, error);
         if (r < 0)
                 return r;
-        r = lssd_auth_check(&b->ctx->auth, m, error);
+
+        r = lssd_job_new(LSSD_JOB_AUTO_ASSIGN, m, &j);
         if (r < 0)
                 return r;
-        return sd_bus_error_set(error, LSSD_ERROR_NOT_SUPPORTED, "AutoAssign() is not implemented yet");
+        r = lssd_job_set_plan(j, b->config);
+        if (r < 0) {
+                lssd_job_free(j);
+                return r;
+        }
+        if (o.has_store)
+                j->plan.store = o.store;
+        if (o.has_nmt_stop)
+                j->plan.nmt_stop = o.nmt_stop;
+        return submit(b, m, j, false, error);
 }
 
 static int method_set_bitrate(sd_bus_message *m, void *userdata, sd_bus_error *error) {

@@ -364,5 +364,44 @@ void lssd_context_notify_status(lssd_context *ctx, bool ready) {
                 n += (size_t) snprintf(status + n, sizeof(status) - n, "%s %s (%s)", i == 0 ? ":" : ",", b->ifname,
                                        lssd_bus_state(b));
         }
+        for (size_t i = 0; i < ctx->n_buses && n < sizeof(status); i++) {
+                const lssd_bus *b = ctx->buses[i];
+                if (b->removing)
+                        continue;
+                if (b->boot_pending && b->link == LSS_LINK_UP)
+                        n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s: auto-assigning", b->ifname);
+                else if (b->boot_pending)
+                        n += (size_t) snprintf(status + n, sizeof(status) - n, "; waiting for %s", b->ifname);
+                else if (b->boot_status)
+                        n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s", b->boot_status);
+        }
         (void) sd_notifyf(0, "%sSTATUS=%s", ready ? "READY=1\n" : "", status);
+}
+
+static bool boot_passes_running(const lssd_context *ctx) {
+        for (size_t i = 0; i < ctx->n_buses; i++)
+                if (ctx->buses[i]->boot_pending && ctx->buses[i]->link == LSS_LINK_UP && !ctx->buses[i]->removing)
+                        return true;
+        return false;
+}
+
+void lssd_context_notify_ready(lssd_context *ctx) {
+        ctx->started = true;
+        if (boot_passes_running(ctx)) {
+                ctx->ready_deferred = true;
+                lssd_context_notify_status(ctx, false);
+                log_info("Auto-assigning before reporting ready");
+                return;
+        }
+        lssd_context_notify_status(ctx, true);
+}
+
+void lssd_context_boot_pass_done(lssd_context *ctx) {
+        if (ctx->ready_deferred && !boot_passes_running(ctx)) {
+                ctx->ready_deferred = false;
+                lssd_context_notify_status(ctx, true);
+                log_info("Boot auto-assignment over: ready");
+                return;
+        }
+        lssd_context_notify_status(ctx, false);
 }

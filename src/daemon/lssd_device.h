@@ -28,6 +28,7 @@ struct lssd_device {
         uint8_t mapped_node_id; /* from the bus's map; 0 = not in the map */
         bool missing;           /* a scan that covers it did not find it */
         bool assigned;          /* its node-ID came from this daemon (AssignNodeId) */
+        bool blocked;           /* the last auto-assign pass found its mapped node-ID taken */
         const char *state;      /* as published */
         uint64_t last_seen;     /* µs, CLOCK_REALTIME; 0 = never */
         unsigned changed;       /* LSSD_DEVICE_CHANGED_* not yet signalled */

@@ -17,6 +17,8 @@ const char *lssd_job_name(const lssd_job *j) {
                 return j->n_steps > 0 ? lssd_raw_op_to_string(j->steps[0].op) : "Raw";
         case LSSD_JOB_EXECUTE:
                 return "Execute";
+        case LSSD_JOB_AUTO_ASSIGN:
+                return "AutoAssign";
         default:
                 return "?";
         }
@@ -54,8 +56,38 @@ lssd_job *lssd_job_free(lssd_job *j) {
         free(j->steps);
         free(j->pairs);
         free(j->found);
+        free(j->map);
         free(j);
         return NULL;
+}
+
+int lssd_job_set_plan(lssd_job *j, const lssd_bus_config *c) {
+        lss_map_entry *map = NULL;
+
+        if (c->n_devices > 0) {
+                map = calloc(c->n_devices, sizeof(*map));
+                if (!map)
+                        return -ENOMEM;
+        }
+        /* the loader resolved vendor/product from the bus defaults already */
+        for (size_t i = 0; i < c->n_devices; i++)
+                map[i] = (lss_map_entry) {
+                        .id = c->devices[i].identity,
+                        .revision_known = c->devices[i].has_revision,
+                        .node_id = c->devices[i].node_id,
+                };
+        free(j->map);
+        j->map = map;
+        j->plan = (lss_autoassign_plan) {
+                .map = map,
+                .n_map = c->n_devices,
+                .unknown = c->unknown == LSSD_UNKNOWN_POOL ? LSS_UNKNOWN_POOL : LSS_UNKNOWN_IGNORE,
+                .pool_lo = c->pool_lo,
+                .pool_hi = c->pool_hi,
+                .store = c->store,
+                .nmt_stop = c->nmt_stop,
+        };
+        return 0;
 }
 
 int lssd_job_add_pair(lssd_job *j, uint32_t vendor, uint32_t product) {

@@ -12,6 +12,8 @@
 
 #include "daemon/lssd_options.h"
 #include "daemon/lssd_raw.h"
+#include "config/lssd_config.h"
+#include "lss/lss_autoassign.h"
 #include "lss/lss_master.h"
 
 typedef enum lssd_job_type {
@@ -20,6 +22,7 @@ typedef enum lssd_job_type {
         LSSD_JOB_ASSIGN,  /* AssignNodeId() of Bus or Device */
         LSSD_JOB_RAW,     /* one raw service of the bus holder */
         LSSD_JOB_EXECUTE, /* Execute(): raw services in a row, then switch-global waiting */
+        LSSD_JOB_AUTO_ASSIGN, /* AutoAssign() or the boot pass: make the bus match the map */
         _LSSD_JOB_TYPE_MAX,
 } lssd_job_type;
 
@@ -56,14 +59,24 @@ struct lssd_job {
         lss_device *found;           /* merged results of all stages */
         size_t n_found;
         bool scan_incomplete;        /* a stage failed: devices not found are not "missing" */
+
+        /* AUTO_ASSIGN: the engine keeps a pointer to the plan and its map until the pass ends */
+        lss_autoassign_plan plan;
+        lss_map_entry *map;
+        bool boot;                   /* the pass at start (or when the interface appears) */
+        char summary[192];           /* "<ifname>: N assigned, ..." once it ended, for logs and STATUS= */
 };
 
-/* "Reset", "Scan", "AssignNodeId", the raw method name, "Execute". */
+/* "Reset", "Scan", "AssignNodeId", the raw method name, "Execute", "AutoAssign". */
 const char *lssd_job_name(const lssd_job *j);
 
 /* A new job; request (may be NULL) is referenced, its sender copied. */
 int lssd_job_new(lssd_job_type type, sd_bus_message *request, lssd_job **ret);
 lssd_job *lssd_job_free(lssd_job *j);
+
+/* Fills an auto-assign job's plan from a bus configuration (the map is
+ * copied: a reload during the pass does not pull it away). */
+int lssd_job_set_plan(lssd_job *j, const lssd_bus_config *c);
 
 /* Adds a vendor/product pair to a scan job unless it is there. */
 int lssd_job_add_pair(lssd_job *j, uint32_t vendor, uint32_t product);

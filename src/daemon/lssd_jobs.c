@@ -8,6 +8,7 @@
 #include "daemon/lssd_jobs.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_path.h"
+#include "lss/lss_autoassign.h"
 
 /* Failing to send a reply only means the caller is gone: log it and go on. */
 static void reply_error(lssd_job *j, const sd_bus_error *e) {
@@ -227,6 +228,7 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                         d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
                 d->node_id = j->node_id;
                 d->assigned = true;
+                d->blocked = false;
                 d->missing = false;
                 d->last_seen = lssd_realtime_us();
                 d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
@@ -403,6 +405,163 @@ static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
         return 0;
 }
 
+/* ---- AutoAssign: the engine's pass over the map ---- */
+
+static bool map_entry_matches(const lss_map_entry *e, const lss_identity *id) {
+        return e->id.vendor == id->vendor && e->id.product == id->product && e->id.serial == id->serial &&
+               (!e->revision_known || e->id.revision == id->revision);
+}
+
+/* A mapped device that is not there: the objects of it we know (any revision
+ * when the map has none) are missing; only when we know none is one made from
+ * the map's identity, so that the absence shows. */
+static bool autoassign_mark_missing(lssd_bus *b, const lssd_job *j, const lss_outcome *o) {
+        bool marked = false;
+        for (size_t i = 0; i < j->plan.n_map; i++) {
+                const lss_map_entry *e = &j->plan.map[i];
+                if (!map_entry_matches(e, &o->id))
+                        continue;
+                for (lssd_device *d = b->devices; d; d = d->next)
+                        if (map_entry_matches(e, &d->id)) {
+                                d->missing = true;
+                                d->blocked = false;
+                                marked = true;
+                        }
+        }
+        return marked;
+}
+
+/* Brings the Device object of one outcome up to date. */
+static void autoassign_publish_one(lssd_bus *b, const lssd_job *j, const lss_outcome *o, uint64_t now_realtime) {
+        bool missing = o->kind == LSS_OUTCOME_MISSING;
+        uint8_t node_id = o->new_node_id != 0 ? o->new_node_id : LSS_NODE_ID_UNCONFIGURED;
+        lssd_device *d = NULL;
+        char ident[40];
+
+        if (missing && autoassign_mark_missing(b, j, o))
+                return;
+        int k = lssd_bus_get_device(b, &o->id, node_id, &d);
+        if (k < 0) {
+                log_error("%s: failed to record device %s: %s", b->ifname,
+                          lssd_identity_format(&o->id, ident, sizeof(ident)), strerror(-k));
+                return;
+        }
+        if (!missing && o->new_node_id != 0 && d->node_id != o->new_node_id) {
+                d->node_id = o->new_node_id;
+                d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
+        }
+        if (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL)
+                d->assigned = true;
+        d->blocked = o->kind == LSS_OUTCOME_CONFLICT;
+        d->missing = missing;
+        if (!missing) {
+                d->last_seen = now_realtime;
+                d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
+        }
+}
+
+static void autoassign_log_one(lssd_bus *b, const lss_outcome *o) {
+        char ident[40], detail[200] = "";
+        int priority = LOG_INFO;
+
+        lssd_identity_format(&o->id, ident, sizeof(ident));
+        switch (o->kind) {
+        case LSS_OUTCOME_ASSIGNED:
+        case LSS_OUTCOME_POOL:
+                priority = LOG_NOTICE;
+                break;
+        case LSS_OUTCOME_MISSING:
+        case LSS_OUTCOME_CONFLICT:
+        case LSS_OUTCOME_FAILED:
+                priority = LOG_WARNING;
+                break;
+        default:
+                break;
+        }
+        if (o->message[0])
+                snprintf(detail, sizeof(detail), ": %s", o->message);
+        lssd_log_device(priority, b->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s",
+                        b->ifname, ident, lss_outcome_name(o->kind), o->old_node_id, o->new_node_id, detail);
+}
+
+static bool outcome_changed(const lss_outcome *o) {
+        return o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL;
+}
+
+static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
+        size_t n = 0, count[LSS_OUTCOME_FAILED + 1] = { 0 };
+        const lss_outcome *out;
+        sd_bus *bus = b->ctx->bus;
+        uint64_t now_realtime = lssd_realtime_us();
+
+        if (!r) {
+                int k = lss_master_autoassign(b->engine, &j->plan, lssd_bus_now(b));
+                return k < 0 ? job_start_failed(b, j, k) : 1;
+        }
+
+        out = lss_master_outcomes(b->engine, &n);
+        for (size_t i = 0; i < n; i++) {
+                autoassign_publish_one(b, j, &out[i], now_realtime);
+                autoassign_log_one(b, &out[i]);
+                if ((unsigned) out[i].kind <= LSS_OUTCOME_FAILED)
+                        count[out[i].kind]++;
+        }
+        lssd_bus_refresh_devices(b);
+
+        if (bus)
+                for (size_t i = 0; i < n; i++) {
+                        const lss_outcome *o = &out[i];
+                        lssd_device *d = lssd_bus_find_device(b, &o->id);
+                        if (outcome_changed(o) && d)
+                                (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
+                                                          d->path, o->old_node_id, o->new_node_id);
+                        else if (o->kind == LSS_OUTCOME_UNKNOWN)
+                                (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu",
+                                                          o->id.vendor, o->id.product, o->id.revision, o->id.serial);
+                }
+
+        snprintf(j->summary, sizeof(j->summary),
+                 "%s: %zu assigned, %zu from the pool, %zu unchanged, %zu unknown, %zu missing, %zu conflicts, "
+                 "%zu failed", b->ifname, count[LSS_OUTCOME_ASSIGNED], count[LSS_OUTCOME_POOL],
+                 count[LSS_OUTCOME_UNCHANGED], count[LSS_OUTCOME_UNKNOWN], count[LSS_OUTCOME_MISSING],
+                 count[LSS_OUTCOME_CONFLICT], count[LSS_OUTCOME_FAILED]);
+
+        if (r->status != LSS_OK) {
+                /* the pass as a whole broke off (bus down, cancelled): what it did is published above */
+                sd_bus_error e = SD_BUS_ERROR_NULL;
+                lssd_error_from_result(&e, r, _LSSD_SERVICE_MAX, "AutoAssign: ");
+                log_warning("%s: %s (%s)", b->ifname, e.message, j->summary);
+                reply_error(j, &e);
+                sd_bus_error_free(&e);
+                j->result = lssd_status_to_result(r->status);
+                return 0;
+        }
+
+        log_notice("AutoAssign on %s", j->summary);
+        j->result = count[LSS_OUTCOME_CONFLICT] + count[LSS_OUTCOME_FAILED] > 0 ? "partial" : "done";
+
+        if (!j->request)
+                return 0;
+        sd_bus_message *reply = NULL;
+        int k = sd_bus_message_new_method_return(j->request, &reply);
+        if (k >= 0)
+                k = sd_bus_message_open_container(reply, 'a', "(uuuuyy)");
+        for (size_t i = 0; k >= 0 && i < n; i++) {
+                const lss_outcome *o = &out[i];
+                if (outcome_changed(o))
+                        k = sd_bus_message_append(reply, "(uuuuyy)", o->id.vendor, o->id.product, o->id.revision,
+                                                  o->id.serial, o->old_node_id, o->new_node_id);
+        }
+        if (k >= 0)
+                k = sd_bus_message_close_container(reply);
+        if (k >= 0)
+                reply_message(j, reply);
+        else
+                log_error("%s: failed to build the reply of AutoAssign: %s", b->ifname, strerror(-k));
+        sd_bus_message_unref(reply);
+        return 0;
+}
+
 int lssd_job_run(lssd_bus *b, lssd_job *j, const lss_result *r) {
         switch (j->type) {
         case LSSD_JOB_RESET:
@@ -415,6 +574,8 @@ int lssd_job_run(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 return run_raw(b, j, r);
         case LSSD_JOB_EXECUTE:
                 return run_execute(b, j, r);
+        case LSSD_JOB_AUTO_ASSIGN:
+                return run_autoassign(b, j, r);
         default:
                 return job_start_failed(b, j, -EINVAL);
         }

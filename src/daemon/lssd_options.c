@@ -144,6 +144,21 @@ int lssd_assign_options_read(sd_bus_message *m, lssd_assign_options *ret, sd_bus
         return 0;
 }
 
+static const lssd_option autoassign_table[] = {
+        LSSD_OPTION_SEEN("store", 'b', lssd_autoassign_options, store, has_store),
+        LSSD_OPTION_SEEN("nmt_stop", 'b', lssd_autoassign_options, nmt_stop, has_nmt_stop),
+        LSSD_OPTION_END,
+};
+
+int lssd_autoassign_options_read(sd_bus_message *m, lssd_autoassign_options *ret, sd_bus_error *error) {
+        lssd_autoassign_options o = { 0 };
+        int r = lssd_options_read(m, "options", autoassign_table, &o, error);
+        if (r < 0)
+                return r;
+        *ret = o;
+        return 0;
+}
+
 static const lssd_option fastscan_table[] = {
         LSSD_OPTION_SEEN("vendor", 'u', lssd_fastscan_options, value[0], has[0]),
         LSSD_OPTION_SEEN("product", 'u', lssd_fastscan_options, value[1], has[1]),

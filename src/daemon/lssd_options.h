@@ -52,9 +52,17 @@ typedef struct lssd_fastscan_options {
         bool has[4];
 } lssd_fastscan_options;
 
+/* AutoAssign(a{sv} options): `store` b and `nmt_stop` b override the bus's
+ * configuration for this pass. */
+typedef struct lssd_autoassign_options {
+        bool store, nmt_stop;
+        bool has_store, has_nmt_stop;
+} lssd_autoassign_options;
+
 int lssd_scan_options_read(sd_bus_message *m, lssd_scan_options *ret, sd_bus_error *error);
 int lssd_assign_options_read(sd_bus_message *m, lssd_assign_options *ret, sd_bus_error *error);
 int lssd_fastscan_options_read(sd_bus_message *m, const char *argument, lssd_fastscan_options *ret,
                                sd_bus_error *error);
-/* For methods that take no option yet (AutoAssign, SetBitrate): any key is refused. */
+int lssd_autoassign_options_read(sd_bus_message *m, lssd_autoassign_options *ret, sd_bus_error *error);
+/* For methods that take no option yet (SetBitrate): any key is refused. */
 int lssd_no_options_read(sd_bus_message *m, sd_bus_error *error);

@@ -285,6 +285,71 @@ def test_assign():
         env.alive()
 
 
+def test_autoassign():
+    with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
+        c = env.connect()
+        lssd_signals(c)
+        s = SLAVES[0]
+        path = dev('vcan0', s)
+        got = env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0]
+        expect_eq(got, [list(s.identity) + [255, 5]], 'AutoAssign reply')
+        sig = c.wait_signal(lambda m: m.member == 'NodeIdAssigned')
+        expect(sig and sig.body == [path, 255, 5], 'NodeIdAssigned: %r' % (sig and sig.body))
+        unknown = c.wait_signal(lambda m: m.member == 'UnknownDevice')
+        expect(unknown and tuple(unknown.body) == SLAVES[3].identity, 'UnknownDevice: %r' % (unknown and unknown.body))
+        fin = c.wait_signal(lambda m: m.member == 'JobFinished')
+        expect(fin and fin.body == ['AutoAssign', 'done'], 'JobFinished: %r' % (fin and fin.body))
+        nodes = {0x1276: 5, 0x80002468: 6, 17: 7, 0xFFFFFFFF: 255}
+        states = {0x1276: 'assigned', 0x80002468: 'assigned', 17: 'assigned', 0xFFFFFFFF: 'non-configured'}
+        mapped = {0x1276: 5, 0x80002468: 6, 17: 7, 0xFFFFFFFF: 0}
+        for x in SLAVES:
+            p = dev('vcan0', x)
+            expect_eq(env.get(p, DEVICE_IFACE, 'NodeId'), nodes[x.serial], 'NodeId of %x' % x.serial)
+            expect_eq(env.get(p, DEVICE_IFACE, 'MappedNodeId'), mapped[x.serial], 'MappedNodeId of %x' % x.serial)
+            expect_eq(env.get(p, DEVICE_IFACE, 'State'), states[x.serial], 'State of %x' % x.serial)
+        if env.real:
+            st = env.slave_state('vcan0', s.serial)
+            expect_eq((st['active_node_id'], st['stored_node_id']), ('5', '5'), 'slave after AutoAssign')
+            expect(all_waiting(env, 'vcan0', SLAVES), 'slaves left in configuration')
+
+        # idempotent: the second pass changes nothing, with or without the overrides
+        expect_eq(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0], [], 'second AutoAssign')
+        expect_eq(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 2, 'store', 'b', 'false', 'nmt_stop', 'b', 'true')[0],
+                  [], 'AutoAssign with options')
+        expect(not c.wait_signal(lambda m: m.member == 'NodeIdAssigned', timeout=0.5), 'NodeIdAssigned again')
+        expect_eq(env.get(path, DEVICE_IFACE, 'NodeId'), 5, 'NodeId after the second pass')
+        env.alive()
+
+
+def test_autoassign_pool():
+    # unknown devices get node-IDs from the pool; a mapped one that is absent is missing
+    slaves = [SLAVES[0], SLAVES[3]]
+    pool = CONFIG.replace('product = 0x1234;', 'product = 0x1234;\n    unknown = "pool";\n    pool = [100, 101];')
+    with Env({'vcan0': slaves}, config=pool % '') as env:
+        got = sorted(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0])
+        expect_eq(got, sorted([list(SLAVES[0].identity) + [255, 5], list(SLAVES[3].identity) + [255, 100]]),
+                  'AutoAssign reply with a pool')
+        expect_eq(env.get(dev('vcan0', SLAVES[3]), DEVICE_IFACE, 'NodeId'), 100, 'NodeId from the pool')
+        # never seen, and the map has no revision: the object has the map's identity
+        absent = device_path('vcan0', 0x9A, 3, 0, 17)
+        expect_eq(env.get(absent, DEVICE_IFACE, 'State'), 'missing', 'State of an absent slave')
+        expect_eq(env.get(absent, DEVICE_IFACE, 'MappedNodeId'), 7, 'MappedNodeId of an absent slave')
+        expect_eq(env.get(dev('vcan0', SLAVES[0]), DEVICE_IFACE, 'State'), 'assigned', 'State after the pass')
+        env.alive()
+
+
+def test_autoassign_boot():
+    # auto_assign = true: the pass runs at start, before any call
+    boot = CONFIG.replace('product = 0x1234;', 'product = 0x1234;\n    auto_assign = true;')
+    with Env({'vcan0': SLAVES}, config=boot % '') as env:
+        path = dev('vcan0', SLAVES[0])
+        env.wait_until(lambda: env.busctl('get-property', SERVICE, path, DEVICE_IFACE, 'NodeId').rc == 0 and
+                       env.get(path, DEVICE_IFACE, 'NodeId') == 5, what='NodeId 5 from the boot pass')
+        expect_eq(env.get(path, DEVICE_IFACE, 'State'), 'assigned', 'State after the boot pass')
+        expect_eq(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0], [], 'AutoAssign after the boot pass')
+        env.alive()
+
+
 # ---- raw services while holding the bus ----
 
 def test_raw():
@@ -430,7 +495,7 @@ def test_bad_arguments():
             (B0, BUS_IFACE, 'SetBitrate', ('uqa{sv}', 12345, 10, 0), INVALID_ARGS, 'bitrate 12345'),
             (B0, BUS_IFACE, 'SetBitrate', ('uqa{sv}', 250000, 10, 0), ERR + 'NotSupported', ''),
             (B0, BUS_IFACE, 'AutoAssign', ('a{sv}', 1, 'x', 'b', 'true'), INVALID_ARGS, "'x'"),
-            (B0, BUS_IFACE, 'AutoAssign', ('a{sv}', 0), ERR + 'NotSupported', ''),
+            (B0, BUS_IFACE, 'AutoAssign', ('a{sv}', 1, 'store', 's', 'yes'), INVALID_ARGS, "'store'"),
             (B0, BUS_IFACE, 'Execute', ('a(sv)', 1, 'Reboot', 'b', 'true'), INVALID_ARGS, "'Reboot'"),
             (B0, BUS_IFACE, 'Execute', ('a(sv)', 1, 'ConfigureNodeId', 'y', 0), INVALID_ARGS, 'node_id 0'),
             (B0, BUS_IFACE, 'Execute', ('a(sv)', 1, 'ConfigureNodeId', 'u', 5), INVALID_ARGS, "'y', not 'u'"),
@@ -774,6 +839,9 @@ TESTS = {
     'scan': test_scan,
     'scan-options': test_scan_options,
     'assign': test_assign,
+    'autoassign': test_autoassign,
+    'autoassign-pool': test_autoassign_pool,
+    'autoassign-boot': test_autoassign_boot,
     'raw': test_raw,
     'holder-killed': test_holder_killed,
     'execute': test_execute,
