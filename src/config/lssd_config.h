@@ -33,7 +33,7 @@ typedef enum lssd_unknown_policy {
 } lssd_unknown_policy;
 
 typedef enum lssd_lss_timing {
-        LSSD_LSS_TIMING_ADAPTIVE, /* lss_timeout_ms is a floor the engine may stretch */
+        LSSD_LSS_TIMING_ADAPTIVE, /* waits follow measured latency, capped by lss_timeout_ms */
         LSSD_LSS_TIMING_FIXED,    /* every wait is exactly lss_timeout_ms */
 } lssd_lss_timing;
 
