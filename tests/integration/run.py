@@ -344,7 +344,8 @@ def test_autoassign_boot():
     with Env({'vcan0': SLAVES}, config=boot % '') as env:
         path = dev('vcan0', SLAVES[0])
         env.wait_until(lambda: env.busctl('get-property', SERVICE, path, DEVICE_IFACE, 'NodeId').rc == 0 and
-                       env.get(path, DEVICE_IFACE, 'NodeId') == 5, what='NodeId 5 from the boot pass')
+                       env.get(path, DEVICE_IFACE, 'NodeId') == 5, timeout=600,
+                       what='NodeId 5 from the boot pass')
         expect_eq(env.get(path, DEVICE_IFACE, 'State'), 'assigned', 'State after the boot pass')
         expect_eq(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0], [], 'AutoAssign after the boot pass')
         env.alive()

@@ -123,8 +123,10 @@ int main(int argc, char **argv) {
         }
         lss_timing_config c;
         lss_timing_config_default(&c);
-        c.timeout_us = 100000; /* a VM under TCG schedules in milliseconds */
-        c.floor_us = 10000;
+        /* a VM under TCG schedules in milliseconds, and slower when loaded */
+        c.timeout_us = 100000;
+        c.floor_us = 15000;
+        c.retries = 6;
         c.bitrate = 0;         /* vcan: no wire time */
         lss_master *m = lss_master_new(&c);
         const lss_result *res;
