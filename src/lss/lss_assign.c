@@ -40,13 +40,7 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                 goto out;
         }
         if (s->flags & LSS_ASSIGN_CHECK_FREE) {
-                /* every CANopen device answers an SDO upload of object 0x1000 */
-                m->step = (lss_step) { .kind = STEP_SDO, .bootup_node = s->node_id, .discovery = true };
-                {
-                        lss_frame f = { .id = 0x600u + s->node_id, .len = 8, .data = { 0x40, 0x00, 0x10, 0x00 } };
-                        step_add_tx(m, &f);
-                }
-                step_start(m);
+                step_node_in_use(m, s->node_id);
                 PT_YIELD(&s->tail_pc);
                 if (m->step.n_answers > 0) {
                         m->result.in_use = true;
@@ -139,13 +133,7 @@ int proc_assign(lss_master *m, lss_assign_state *s) {
         result_reset(m);
         m->result.id = s->id;
         for (s->attempt = 0;; s->attempt++) {
-                step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE);
-                for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
-                        lss_frame f;
-                        lss_encode_switch_selective(&f, i, lss_identity_field(&s->id, i));
-                        step_add_tx(m, &f);
-                }
-                step_start(m);
+                step_selective(m, &s->id);
                 PT_YIELD(&s->pc);
                 if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
                         break;

@@ -211,12 +211,7 @@ int proc_autoassign(lss_master *m) {
                         s->target = s->plan->map[s->i].node_id;
                         if (s->taken[s->target])
                                 continue;
-                        m->step = (lss_step) { .kind = STEP_SDO, .bootup_node = s->target, .discovery = true };
-                        {
-                                lss_frame f = { .id = 0x600u + s->target, .len = 8, .data = { 0x40, 0x00, 0x10 } };
-                                step_add_tx(m, &f);
-                        }
-                        step_start(m);
+                        step_node_in_use(m, s->target);
                         PT_YIELD(&s->pc);
                         s->taken[s->target] = m->step.n_answers > 0;
                 }

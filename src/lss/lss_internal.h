@@ -122,6 +122,10 @@ struct lss_master {
 void step_lss(lss_master *m, int expect_cs);
 void step_add_tx(lss_master *m, const lss_frame *f);
 void step_start(lss_master *m);
+/* Switch state selective (4 frames), waiting for 0x44. */
+void step_selective(lss_master *m, const lss_identity *id);
+/* SDO upload of 0x1000 to node_id: answered means the node-ID is taken. */
+void step_node_in_use(lss_master *m, uint8_t node_id);
 void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx);
 void step_on_time(lss_master *m, uint64_t now);
 uint64_t step_deadline(const lss_master *m);

@@ -158,13 +158,7 @@ static int proc_switch_global(lss_master *m) {
 
 static int proc_switch_selective(lss_master *m) {
         PT_BEGIN(&m->pc);
-        step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE);
-        for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
-                lss_frame f;
-                lss_encode_switch_selective(&f, i, lss_identity_field(&m->sel_id, i));
-                step_add_tx(m, &f);
-        }
-        step_start(m);
+        step_selective(m, &m->sel_id);
         PT_YIELD(&m->pc);
         m->result.found = step_answered(m);
         if (!m->result.found)

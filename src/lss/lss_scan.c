@@ -55,13 +55,7 @@ static int verify_candidates(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->vpc);
         s->dropped = 0;
         for (s->i = 0; s->i < s->n_cand; s->i++) {
-                step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE);
-                for (unsigned f = 0; f < LSS_FIELD_COUNT; f++) {
-                        lss_frame fr;
-                        lss_encode_switch_selective(&fr, f, lss_identity_field(&s->cand[s->i].id, f));
-                        step_add_tx(m, &fr);
-                }
-                step_start(m);
+                step_selective(m, &s->cand[s->i].id);
                 PT_YIELD(&s->vpc);
                 if (!step_answered(m)) {
                         s->dropped++;

@@ -20,6 +20,25 @@ void step_add_tx(lss_master *m, const lss_frame *f) {
                 m->step.tx[m->step.n_tx++] = *f;
 }
 
+void step_selective(lss_master *m, const lss_identity *id) {
+        step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE);
+        for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
+                lss_frame f;
+                lss_encode_switch_selective(&f, i, lss_identity_field(id, i));
+                step_add_tx(m, &f);
+        }
+        step_start(m);
+}
+
+/* Every CANopen device has an SDO server: an expedited upload request of
+ * object 0x1000 (device type) to a node-ID is answered by whoever has it. */
+void step_node_in_use(lss_master *m, uint8_t node_id) {
+        m->step = (lss_step) { .kind = STEP_SDO, .bootup_node = node_id, .discovery = true };
+        lss_frame f = { .id = 0x600u + node_id, .len = 8, .data = { 0x40, 0x00, 0x10, 0x00 } };
+        step_add_tx(m, &f);
+        step_start(m);
+}
+
 void step_start(lss_master *m) {
         lss_step *s = &m->step;
 
