@@ -10,7 +10,7 @@
  *
  * Loading never prints and never exits: errors and warnings go to a
  * lssd_diag list, each naming "file:line: what: problem". Warnings (unknown
- * keys, no buses) do not make the load fail; any error does. `@include` is
+ * keys) do not make the load fail; any error (no buses included) does. `@include` is
  * rejected (one file, one place to look). */
 #pragma once
 

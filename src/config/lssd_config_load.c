@@ -478,7 +478,8 @@ static void parse_root(loader *l, const config_setting_t *root, lssd_config *c, 
 
         buses = config_setting_get_member(root, "buses");
         if (!buses) {
-                lssd_diag_add(l->diag, LSSD_DIAG_WARNING, "%s:1: no buses configured (no 'buses' list)", l->name);
+                /* an empty or truncated file must not pass for a configuration that serves nothing */
+                lssd_diag_add(l->diag, LSSD_DIAG_ERROR, "%s:1: no buses configured (no 'buses' list)", l->name);
                 return;
         }
         if (config_setting_type(buses) != CONFIG_TYPE_LIST) {
@@ -487,7 +488,7 @@ static void parse_root(loader *l, const config_setting_t *root, lssd_config *c, 
         }
         size_t n = (size_t) config_setting_length(buses);
         if (n == 0) {
-                warning_at(l, buses, "no buses configured (empty list)");
+                error_at(l, buses, "no buses configured (empty list)");
                 return;
         }
 

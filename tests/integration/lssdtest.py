@@ -46,6 +46,16 @@ class Skip(Exception):
     pass
 
 
+def unit_exec_start(config_path):
+    """lssd's command line as systemd/lssd.service.in starts it, for config_path."""
+    with open(os.path.join(SOURCE_ROOT, 'systemd', 'lssd.service.in')) as f:
+        line = next(x for x in f.read().splitlines() if x.startswith('ExecStart='))
+    argv = line[len('ExecStart='):].split()
+    argv = [a.replace('@sysconfdir@/lssd/lssd.conf', config_path) for a in argv]
+    assert argv[0] == '@sbindir@/lssd' and config_path in argv, 'unexpected ExecStart line: ' + line
+    return [os.environ.get('LSSD_BINARY', 'lssd')] + argv[1:]
+
+
 def bus_path(ifname):
     return ROOT + '/buses/' + ''.join(c if c.isascii() and c.isalnum() else '_%02x' % ord(c) for c in ifname)
 
@@ -95,8 +105,11 @@ class Env:
     """One private bus, lss-sim per interface, one lssd."""
 
     def __init__(self, slaves=None, config=None, lssd_args=(), lssd_policy_override=False, candump=False,
-                 notify=False, sim_args=()):
+                 notify=False, sim_args=(), absent=(), start_lssd=True):
         self.slaves = slaves if slaves is not None else {'vcan0': []}
+        # interfaces the test creates later: no check, no lss-sim at start
+        self.absent = set(absent)
+        self.want_lssd = start_lssd
         self.config = config
         self.lssd_args = list(lssd_args)
         self.override = lssd_policy_override
@@ -137,6 +150,8 @@ class Env:
         self.step('start (%s, LSS timeout %d ms)' % (self.backend, self.lss_timeout))
         if self.real:
             for ifname in self.slaves:
+                if ifname in self.absent:
+                    continue
                 if not os.path.exists('/sys/class/net/' + ifname):
                     raise Skip('%s is not there (run through tests/vm/run)' % ifname)
             if os.geteuid() != 0:
@@ -150,9 +165,11 @@ class Env:
             self._start_candump()
         if self.real:
             for ifname, slaves in self.slaves.items():
-                self._start_sim(ifname, slaves)
-        self._start_lssd()
-        self.step('lssd ready')
+                if ifname not in self.absent:
+                    self._start_sim(ifname, slaves)
+        if self.want_lssd:
+            self._start_lssd()
+            self.step('lssd ready')
 
     def _start_dbus(self):
         sock = os.path.join(self.dir, 'system_bus_socket')
@@ -187,7 +204,8 @@ class Env:
         # bound to every CAN interface: a socket bound to one dies with its link (ENETDOWN)
         self.candump_path = os.path.join(self.dir, 'candump.log')
         f = open(self.candump_path, 'w')
-        p = subprocess.Popen(['candump', '-L', 'any'], stdout=f, stderr=subprocess.STDOUT)
+        # line-buffered: tests watch the log while things happen
+        p = subprocess.Popen(['stdbuf', '-oL', 'candump', '-L', 'any'], stdout=f, stderr=subprocess.STDOUT)
         self.procs.append(p)
         time.sleep(0.3)  # candump has no "ready"
 
@@ -220,13 +238,15 @@ class Env:
         self._start_sim(ifname, slaves)
 
     def _start_lssd(self):
-        cmd = os.environ.get('LSSD_TEST_WRAPPER', '').split() + [os.environ.get('LSSD_BINARY', 'lssd')]
+        cmd = os.environ.get('LSSD_TEST_WRAPPER', '').split()
         if self.config is not None:
             self.config_path = os.path.join(self.dir, 'lssd.conf')
             with open(self.config_path, 'w') as f:
                 f.write(self.config_text(self.config))
-            cmd += ['--config', self.config_path]
+            # with a configuration: exactly the unit's command line
+            cmd += unit_exec_start(self.config_path)
         else:
+            cmd += [os.environ.get('LSSD_BINARY', 'lssd')]
             for ifname in self.slaves:
                 cmd += ['--bus', ifname]
             cmd += ['--lss-timeout', str(self.lss_timeout)]
@@ -239,12 +259,14 @@ class Env:
         env = dict(os.environ, DBUS_SYSTEM_BUS_ADDRESS=self.address)
         env.setdefault('LSSD_LOG_LEVEL', 'debug')
         if self.want_notify:
-            self.notify_path = os.path.join(self.dir, 'notify')
-            self.notify = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
-            self.notify.bind(self.notify_path)
+            if not hasattr(self, 'notify'):
+                self.notify_path = os.path.join(self.dir, 'notify')
+                self.notify = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+                self.notify.bind(self.notify_path)
+                self.notify_msgs = []
             env['NOTIFY_SOCKET'] = self.notify_path
         self.lssd_log_path = os.path.join(self.dir, 'lssd.log')
-        self.lssd_log = open(self.lssd_log_path, 'w')
+        self.lssd_log = open(self.lssd_log_path, 'a')
         self.lssd = subprocess.Popen(cmd, env=env, stdout=self.lssd_log, stderr=subprocess.STDOUT)
         self.procs.append(self.lssd)
         self.wait_for_name()
@@ -269,6 +291,41 @@ class Env:
                 raise RuntimeError('lssd exited with %d:\n%s' % (self.lssd.returncode, self.lssd_output()))
             time.sleep(0.05)
         raise RuntimeError('lssd did not take its name:\n' + self.lssd_output())
+
+    def restart_lssd(self, sig=signal.SIGTERM, between=None):
+        """Stops lssd with sig (SIGKILL: a crash) and starts it again the same
+        way; between() runs while it is not running."""
+        if sig == signal.SIGKILL:
+            self.lssd.kill()
+            self.lssd.wait()
+        else:
+            rc = self.stop_lssd(sig)
+            assert rc == 0, 'lssd exited with %s on %s' % (rc, sig)
+        self.procs.remove(self.lssd)
+        self.step('lssd stopped (%s), starting it again' % signal.Signals(sig).name)
+        if between:
+            between()
+        self._start_lssd()
+
+    def notify_wait(self, pred, timeout=60, what='sd_notify message'):
+        """Reads sd_notify datagrams until pred(message dict) holds; returns that message."""
+        deadline = time.monotonic() + timeout
+        while True:
+            for m in self.notify_msgs:
+                if pred(m):
+                    return m
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise AssertionError('timed out waiting for %s; got %r' % (what, self.notify_msgs))
+            self.notify.settimeout(min(left, 0.5))
+            try:
+                data = self.notify.recv(4096)
+            except socket.timeout:
+                continue
+            m = dict(line.split('=', 1) for line in data.decode().splitlines() if '=' in line)
+            m['_t'], m['_rt'] = time.monotonic(), time.time()
+            self.notify_msgs.append(m)
+            self.step('sd_notify: %r' % data.decode())
 
     # ---- tear-down ----
 

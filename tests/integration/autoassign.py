@@ -1,0 +1,351 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""Boot-time auto-assignment from the serial-number map, end to end:
+`autoassign.py NAME` runs one scenario (meson test per name).
+
+lssd is started with the unit's ExecStart line and NOTIFY_SOCKET pointing at a
+datagram socket the test reads; lss-sim's state files and candump are the
+witnesses of what happened on the bus."""
+
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from lssdtest import (BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, Env, Skip, Slave, bus_path,  # noqa: E402
+                      device_path, run, unit_exec_start)
+
+B0 = bus_path('vcan0')
+CS_CONFIGURE_NODE_ID = 0x11
+CS_STORE = 0x17
+
+
+def expect(cond, what):
+    if not cond:
+        raise AssertionError(what)
+
+
+def expect_eq(got, want, what):
+    if got != want:
+        raise AssertionError('%s: got %r, want %r' % (what, got, want))
+
+
+def dev(ifname, s):
+    return device_path(ifname, *s.identity)
+
+
+def config(ifname, devices, **keys):
+    """One bus; keys are bus-level settings (Python values written as libconfig)."""
+    def value(v):
+        if isinstance(v, bool):
+            return 'true' if v else 'false'
+        if isinstance(v, str) and not v.startswith('0x'):
+            return '"%s"' % v
+        if isinstance(v, list):
+            return '[%s]' % ', '.join(str(x) for x in v)
+        return str(v)
+    lines = ['lss_timeout_ms = @TIMEOUT@;', 'buses = (', '  {', '    interface = "%s";' % ifname]
+    lines += ['    %s = %s;' % (k, value(v)) for k, v in keys.items()]
+    lines.append('    devices = (')
+    lines.append(',\n'.join('      { serial = 0x%x; node_id = %d;%s }' %
+                             (d[0], d[1], ' revision = 0x%x;' % d[2] if len(d) > 2 else '') for d in devices))
+    lines += ['    );', '  }', ');', '']
+    return '\n'.join(lines)
+
+
+def slave_ids(env, ifname, slaves):
+    """serial -> (active, stored) node-ID from lss-sim's state files."""
+    out = {}
+    for s in slaves:
+        st = env.slave_state(ifname, s.serial)
+        out[s.serial] = (int(st.get('active_node_id', -1)), int(st.get('stored_node_id', -1)))
+    return out
+
+
+def all_waiting(env, ifname, slaves):
+    return all(env.slave_state(ifname, s.serial).get('lss_state') == 'waiting' for s in slaves)
+
+
+def lssd_lss(frames):
+    """The master's LSS requests among (time, id, data) frames."""
+    return [f for f in frames if f[1] == 0x7E5]
+
+
+def configure_or_store(frames):
+    return [f for f in lssd_lss(frames) if f[2][:1] in (bytes([CS_CONFIGURE_NODE_ID]), bytes([CS_STORE]))]
+
+
+# ---- the encoder scenario of the source manual ----
+
+# six Baumer-like encoders, all shipped at node-ID 1, LSS only in NMT Stopped
+ENCODERS = [Slave(0xEC, 0x3A, 0x10, 0x00A10000 + i, 1) for i in range(6)]
+ENCODER_MAP = [(s.serial, 10 + i) for i, s in enumerate(ENCODERS)]
+
+
+def test_encoder():
+    cfg = config('vcan0', ENCODER_MAP, vendor='0xEC', product='0x3A', auto_assign=True, nmt_stop=True)
+    with Env({'vcan0': ENCODERS}, config=cfg, candump=True, notify=True, sim_args=['--profile', 'encoder']) as env:
+        ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=600, what='READY=1')
+        env.step('READY=1 with STATUS=%s' % ready.get('STATUS'))
+        status = ready.get('STATUS', '')
+        expect('vcan0' in status and '6 assigned' in status, 'STATUS at READY names the pass: ' + status)
+        before = [m for m in env.notify_msgs if m is not ready and m['_t'] <= ready['_t']]
+        expect(any('auto-assigning' in m.get('STATUS', '') for m in before),
+               'a STATUS saying the pass runs came before READY: %r' % before)
+
+        for s, node in ENCODER_MAP:
+            p = device_path('vcan0', 0xEC, 0x3A, 0x10, s)
+            expect_eq(env.get(p, DEVICE_IFACE, 'NodeId'), node, 'NodeId of %x' % s)
+            expect_eq(env.get(p, DEVICE_IFACE, 'State'), 'assigned', 'State of %x' % s)
+        if not env.real:
+            return
+
+        expect_eq(slave_ids(env, 'vcan0', ENCODERS), {s: (n, n) for s, n in ENCODER_MAP}, 'encoders after the pass')
+        expect(all_waiting(env, 'vcan0', ENCODERS), 'encoders left in configuration')
+        frames = env.frames('vcan0')
+        for s, node in ENCODER_MAP:
+            expect(any(f[1] == 0x700 + node and f[2] == b'\x00' for f in frames), 'boot-up of node %d' % node)
+        # READY only after the pass: every LSS request of it was on the bus before
+        expect(frames and lssd_lss(frames)[-1][0] <= ready['_rt'] + 0.05,
+               'LSS frames after READY=1 (last at %.3f, READY at %.3f)' % (lssd_lss(frames)[-1][0], ready['_rt']))
+        expect(any(f[1] == 0 and f[2] == b'\x02\x00' for f in frames), 'NMT Stop to all nodes')
+
+        # second run on a bus that matches the map: no Configure, no Store
+        n = len(frames)
+        env.restart_lssd()
+        again = env.notify_wait(lambda m: m.get('READY') == '1' and m['_t'] > ready['_t'], timeout=600,
+                                what='READY=1 of the second run')
+        expect('6 unchanged' in again.get('STATUS', ''), 'STATUS of the second run: %r' % again.get('STATUS'))
+        after = env.frames('vcan0')[n:]
+        expect(lssd_lss(after), 'the second run sent no LSS frame at all')
+        expect_eq(configure_or_store(after), [], '0x11/0x17 frames in the second run')
+        expect_eq(slave_ids(env, 'vcan0', ENCODERS), {s: (n, n) for s, n in ENCODER_MAP}, 'encoders after run 2')
+        env.alive()
+
+
+# ---- a mixed bus ----
+
+V, P, R = 0xEC, 0x1234, 1
+A = Slave(V, P, R, 0xA1)         # mapped, non-configured
+B = Slave(V, P, R, 0xB2, 9)      # mapped to 6, configured with 9
+C = Slave(V, P, R, 0xC3, 7)      # mapped to 7 and at 7
+D = Slave(V, P, R, 0xD4)         # not in the map, non-configured
+G = Slave(V, P, R, 0x66, 10)     # not in the map, at 10
+H = Slave(V, P, R, 0x88)         # mapped to 10, which G answers to
+ABSENT = 0xE5                    # mapped to 8, not on the bus
+MIXED = [A, B, C, D, G, H]
+MIXED_MAP = [(A.serial, 5), (B.serial, 6), (C.serial, 7), (ABSENT, 8), (H.serial, 10)]
+
+
+def autoassign_lines(env):
+    return [x for x in env.lssd_output().splitlines() if 'AutoAssign: device' in x]
+
+
+def test_mixed():
+    cfg = config('vcan0', MIXED_MAP, vendor=hex(V), product=hex(P), unknown='ignore', pool=[20, 21])
+    with Env({'vcan0': MIXED}, config=cfg, candump=True) as env:
+        c = env.connect()
+        c.add_match("type='signal',sender='org.lssd.LSS1'")
+        got = sorted(tuple(x) for x in env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0])
+        expect_eq(got, sorted([A.identity + (255, 5), B.identity + (9, 6)]), 'AutoAssign reply')
+        unknown = c.wait_signal(lambda m: m.member == 'UnknownDevice' and m.body[3] == D.serial)
+        expect(unknown, 'UnknownDevice for the unmapped non-configured device')
+        fin = c.wait_signal(lambda m: m.member == 'JobFinished')
+        expect(fin and fin.body == ['AutoAssign', 'partial'], 'JobFinished of a pass with a conflict: %r' %
+               (fin and fin.body))
+        states = {A: ('assigned', 5, 5), B: ('assigned', 6, 6), C: ('assigned', 7, 7), D: ('non-configured', 255, 0),
+                  H: ('conflict', 255, 10)}
+        for s, (state, node, mapped) in states.items():
+            p = dev('vcan0', s)
+            got = (env.get(p, DEVICE_IFACE, 'State'), env.get(p, DEVICE_IFACE, 'NodeId'),
+                   env.get(p, DEVICE_IFACE, 'MappedNodeId'))
+            expect_eq(got, (state, node, mapped), 'State, NodeId, MappedNodeId of %x' % s.serial)
+        absent = device_path('vcan0', V, P, 0, ABSENT)
+        expect_eq(env.get(absent, DEVICE_IFACE, 'State'), 'missing', 'State of the absent mapped device')
+        lines = autoassign_lines(env)
+        for s in (A, B, C, D, H):
+            expect(any('%08x' % s.serial in x.lower() for x in lines), 'no journal line for %x: %r' % (s.serial, lines))
+
+        if env.real:
+            ids = slave_ids(env, 'vcan0', MIXED)
+            expect_eq(ids, {A.serial: (5, 5), B.serial: (6, 6), C.serial: (7, 7), D.serial: (255, 255),
+                            G.serial: (10, 10), H.serial: (255, 255)}, 'slaves after the pass')
+            expect(all_waiting(env, 'vcan0', MIXED), 'slaves left in configuration')
+            frames = env.frames('vcan0')
+            configured = [f[2][1] for f in lssd_lss(frames) if f[2][0] == CS_CONFIGURE_NODE_ID]
+            expect_eq(sorted(configured), [5, 6], 'Configure Node-ID requests')
+            expect((0, b'\x82\x09') in [(f[1], f[2]) for f in frames], 'NMT Reset Communication to the old ID 9')
+            for node in (5, 6):
+                expect(any(f[1] == 0x700 + node and f[2] == b'\x00' for f in frames), 'boot-up of node %d' % node)
+            n = len(frames)
+
+        # the same bus with unknown = "pool": only the unknown device changes
+        with open(env.config_path, 'w') as f:
+            f.write(env.config_text(cfg.replace('"ignore"', '"pool"')))
+        env.call(MANAGER, MANAGER_IFACE, 'ReloadConfig')
+        got = [tuple(x) for x in env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0]]
+        expect_eq(got, [D.identity + (255, 20)], 'AutoAssign with the pool')
+        expect_eq(env.get(dev('vcan0', D), DEVICE_IFACE, 'State'), 'assigned', 'State of the pooled device')
+        expect_eq(env.get(dev('vcan0', H), DEVICE_IFACE, 'State'), 'conflict', 'State of the blocked device')
+        if env.real:
+            expect_eq(slave_ids(env, 'vcan0', [D])[D.serial], (20, 20), 'pooled device')
+            configured = [f[2][1] for f in lssd_lss(env.frames('vcan0')[n:]) if f[2][0] == CS_CONFIGURE_NODE_ID]
+            expect_eq(configured, [20], 'Configure Node-ID requests of the pool pass')
+            expect(all_waiting(env, 'vcan0', MIXED), 'slaves left in configuration')
+        env.alive()
+
+
+# ---- the interface is not there at boot ----
+
+def test_notify_missing_interface():
+    s = Slave(V, P, R, 0x5151)
+    cfg = config('vcan2', [(s.serial, 33)], vendor=hex(V), product=hex(P), auto_assign=True)
+    env = Env({'vcan2': [s]}, config=cfg, candump=True, notify=True, absent=('vcan2',))
+    if not env.real:
+        raise Skip('needs interfaces that come and go')
+    subprocess.run(['ip', 'link', 'del', 'vcan2'], stderr=subprocess.DEVNULL)
+    try:
+        with env:
+            ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=120, what='READY=1')
+            expect('waiting for vcan2' in ready.get('STATUS', ''), 'STATUS at READY: %r' % ready.get('STATUS'))
+            expect_eq(env.get(bus_path('vcan2'), BUS_IFACE, 'State'), 'down', 'State of the missing bus')
+
+            # it appears (down first, lss-sim listening), then comes up: the pass runs
+            subprocess.run(['ip', 'link', 'add', 'dev', 'vcan2', 'type', 'vcan'], check=True)
+            env._start_sim('vcan2', [s])
+            subprocess.run(['ip', 'link', 'set', 'vcan2', 'up'], check=True)
+            done = env.notify_wait(lambda m: '1 assigned' in m.get('STATUS', ''), timeout=300,
+                                   what='STATUS after the late pass')
+            expect('waiting for' not in done['STATUS'], 'STATUS still waits: ' + done['STATUS'])
+            env.wait_until(lambda: slave_ids(env, 'vcan2', [s])[s.serial] == (33, 33), timeout=60,
+                           what='node-ID 33 in the state file')
+            expect_eq(env.get(dev('vcan2', s), DEVICE_IFACE, 'NodeId'), 33, 'NodeId after the late pass')
+            expect(all_waiting(env, 'vcan2', [s]), 'slave left in configuration')
+            env.alive()
+    finally:
+        subprocess.run(['ip', 'link', 'del', 'vcan2'], stderr=subprocess.DEVNULL)
+
+
+# ---- a crash in the middle of a pass ----
+
+def test_crash_restart():
+    rnd = random.Random(5)
+    slaves = [Slave(V, P, R, rnd.getrandbits(32)) for _ in range(8)]
+    # full identities: each device is selected directly, the pass is short
+    mapping = [(s.serial, 40 + i, R) for i, s in enumerate(slaves)]
+    cfg = config('vcan0', mapping, vendor=hex(V), product=hex(P), auto_assign=True)
+    env = Env({'vcan0': slaves}, config=cfg, candump=True, notify=True)
+    if not env.real:
+        raise Skip('the simulated bus dies with lssd')
+    with env:
+        env.wait_until(lambda: any(f[2][0] == CS_CONFIGURE_NODE_ID for f in lssd_lss(env.frames('vcan0'))),
+                       timeout=300, what='the first Configure Node-ID of the pass')
+        want = {m[0]: (m[1], m[1]) for m in mapping}
+        killed = {}
+
+        def after_kill():
+            time.sleep(1)  # what the killed lssd had written reaches candump's log
+            killed['n'] = len(env.frames('vcan0'))
+            killed['ids'] = slave_ids(env, 'vcan0', slaves)
+        env.restart_lssd(signal.SIGKILL, between=after_kill)
+        n_killed = killed['n']
+        expect(killed['ids'] != want, 'the pass ended before the kill: nothing tested')
+        env.step('at the kill: %r' % killed['ids'])
+
+        env.notify_wait(lambda m: m.get('READY') == '1', timeout=600, what='READY=1 after the restart')
+        after = env.frames('vcan0')[n_killed:]
+        mine = [f for f in after if f[1] in (0x000, 0x7E5)]
+        expect(mine, 'lssd sent nothing after the restart')
+        expect_eq((mine[0][1], mine[0][2][:2]), (0x7E5, b'\x04\x00'), 'first frame after the crash')
+        expect_eq(slave_ids(env, 'vcan0', slaves), want, 'slaves after the restarted pass')
+        expect(all_waiting(env, 'vcan0', slaves), 'slaves left in configuration')
+        env.alive()
+
+
+# ---- bad configuration files ----
+
+def bad_files(rnd):
+    head = 'buses = (\n  {\n    interface = "vcan0";\n    vendor = 0xEC;\n    product = 0x1234;\n'
+    junk = bytes(rnd.getrandbits(8) for _ in range(1 << 20))
+    text_junk = ''.join(rnd.choice('abc{}()[];=,"0x123 \n') for _ in range(1 << 20)).encode()
+    return {
+        'syntax': (head + '    devices = ( { serial = ; node_id = 5; } );\n  }\n);\n').encode(),
+        'node-id-range': (head + '    devices = ( { serial = 1; node_id = 200; } );\n  }\n);\n').encode(),
+        'serial-range': (head + '    devices = ( { serial = 0x100000000; node_id = 5; } );\n  }\n);\n').encode(),
+        'duplicate-identity': (head + '    devices = (\n      { serial = 1; node_id = 5; },\n'
+                               '      { serial = 1; node_id = 6; }\n    );\n  }\n);\n').encode(),
+        'duplicate-node-id': (head + '    devices = (\n      { serial = 1; node_id = 5; },\n'
+                              '      { serial = 2; node_id = 5; }\n    );\n  }\n);\n').encode(),
+        'binary-junk': junk,
+        'text-junk': text_junk,
+        'empty': b'',
+    }
+
+
+def file_line(path, text):
+    """A diagnostic naming path:line."""
+    return any(x.startswith(path + ':') and x[len(path) + 1:].split(':', 1)[0].isdigit()
+               for part in text.splitlines() for x in [part.split('error: ', 1)[-1]])
+
+
+def test_bad_config():
+    good = config('vcan0', [(A.serial, 5)], vendor=hex(V), product=hex(P), auto_assign=True)
+    env = Env({'vcan0': [A]}, config=good, candump=True, start_lssd=False)
+    with env:
+        files = {}
+        for name, data in bad_files(random.Random(7)).items():
+            path = os.path.join(env.dir, name + '.conf')
+            with open(path, 'wb') as f:
+                f.write(data)
+            files[name] = path
+
+        # at start: a clear file:line error, an exit status, nothing on the bus
+        for name, path in files.items():
+            chk = subprocess.run([os.environ.get('LSSD_BINARY', 'lssd'), '--check-config', path],
+                                 capture_output=True, text=True, timeout=60)
+            expect_eq(chk.returncode, 1, '--check-config %s exit status' % name)
+            expect(file_line(path, chk.stderr), '--check-config %s names file:line: %r' % (name, chk.stderr[-500:]))
+            start = subprocess.run(unit_exec_start(path), capture_output=True, text=True, timeout=60,
+                                   env=dict(os.environ, DBUS_SYSTEM_BUS_ADDRESS=env.address))
+            expect(start.returncode != 0, 'lssd started with the %s file' % name)
+            expect(file_line(path, start.stderr + start.stdout), 'lssd on %s names file:line: %r' %
+                   (name, (start.stderr + start.stdout)[-500:]))
+        if env.real:
+            time.sleep(0.5)
+            expect_eq(env.frames('vcan0'), [], 'frames sent with bad configurations')
+            expect_eq(slave_ids(env, 'vcan0', [A])[A.serial], (255, 255), 'the slave before the good start')
+
+        # running: a bad file on reload keeps the map in force
+        env._start_lssd()
+        p = dev('vcan0', A)
+        env.wait_until(lambda: env.busctl('get-property', 'org.lssd.LSS1', p, DEVICE_IFACE, 'NodeId').rc == 0 and
+                       env.get(p, DEVICE_IFACE, 'NodeId') == 5, timeout=600, what='the boot pass')
+        for name, path in files.items():
+            with open(path, 'rb') as src, open(env.config_path, 'wb') as dst:
+                dst.write(src.read())
+            err, msg = env.call_error(MANAGER, MANAGER_IFACE, 'ReloadConfig')
+            expect_eq(err, 'org.freedesktop.DBus.Error.InvalidFileContent', 'ReloadConfig with %s' % name)
+            expect(env.config_path in msg, 'the error names the file: ' + msg)
+            log_len = len(env.lssd_output())
+            env.lssd.send_signal(signal.SIGHUP)
+            env.wait_until(lambda: env.config_path + ':' in env.lssd_output()[log_len:], timeout=30,
+                           what='the SIGHUP reload error of %s in the log' % name)
+            expect_eq(env.get(p, DEVICE_IFACE, 'MappedNodeId'), 5, 'MappedNodeId after a bad %s reload' % name)
+            expect_eq(env.get(MANAGER, MANAGER_IFACE, 'Buses'), [B0], 'Buses after a bad %s reload' % name)
+        expect_eq(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0], [], 'AutoAssign with the old map in force')
+        env.alive()
+
+
+TESTS = {
+    'encoder': test_encoder,
+    'mixed': test_mixed,
+    'notify-missing-interface': test_notify_missing_interface,
+    'crash-restart': test_crash_restart,
+    'bad-config': test_bad_config,
+}
+
+if __name__ == '__main__':
+    sys.exit(run(TESTS))
