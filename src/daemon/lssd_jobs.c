@@ -379,7 +379,8 @@ static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (++j->stage <= j->n_pairs)
                 return scan_start_stage(b, j);
 
-        qsort(j->found, j->n_found, sizeof(*j->found), compare_devices);
+        if (j->n_found > 1) /* found is NULL when nothing was found, and qsort's pointer is nonnull */
+                qsort(j->found, j->n_found, sizeof(*j->found), compare_devices);
         scan_publish(b, j, lssd_realtime_us());
         scan_log(b, j);
         j->result = "done";

@@ -142,7 +142,15 @@ static int read_step(sd_bus_message *m, size_t i, lssd_raw_step *s, sd_bus_error
         op = lssd_raw_op_from_string(name);
         if (op < 0) {
                 char shown[48];
-                snprintf(shown, sizeof(shown), "%s", name);
+                size_t n = strlen(name);
+                if (n >= sizeof(shown)) {
+                        /* cut before a character, never inside one: the reply must stay valid UTF-8 */
+                        n = sizeof(shown) - 1;
+                        while (n > 0 && ((unsigned char) name[n] & 0xC0) == 0x80)
+                                n--;
+                }
+                memcpy(shown, name, n);
+                shown[n] = '\0';
                 return sd_bus_error_setf(error, SD_BUS_ERROR_INVALID_ARGS,
                                          "steps[%zu]: unknown step '%s%s': a step is a raw method name "
                                          "(SwitchModeGlobal, SwitchModeSelective, ConfigureNodeId, ...)",
