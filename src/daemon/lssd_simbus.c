@@ -88,6 +88,8 @@ int lssd_simbus_new(uint32_t bitrate, lssd_simbus **ret) {
                 return -ENOMEM;
         }
         s->t0 = monotonic_us();
+        /* identical answers that wait for the wire together go out as one frame, as on CAN */
+        membus_set_merge_identical(s->bus, true);
         if (getenv("LSSD_SIM_TRACE"))
                 membus_set_trace(s->bus, trace_frame, s);
         *ret = s;

@@ -25,6 +25,8 @@ typedef struct lss_aa_state {
         bool taken[128];        /* answered an SDO probe before NMT Stop silenced them */
         lss_outcome *out;
         size_t n_out, cap_out;
+        size_t given_before;    /* node-IDs given before the current blind enumeration */
+        unsigned blind_passes;
 } lss_aa_state;
 
 const char *lss_outcome_name(enum lss_outcome_kind k) {
@@ -45,6 +47,14 @@ void lss_autoassign_free_state(lss_master *m) {
         free(m->aa->out);
         free(m->aa);
         m->aa = NULL;
+}
+
+/* How many devices this pass gave a node-ID. */
+static size_t count_given(const lss_aa_state *s) {
+        size_t n = 0;
+        for (size_t i = 0; i < s->n_out; i++)
+                n += s->out[i].kind == LSS_OUTCOME_ASSIGNED || s->out[i].kind == LSS_OUTCOME_POOL;
+        return n;
 }
 
 static lss_outcome *outcome_add(lss_aa_state *s, const lss_identity *id) {
@@ -282,8 +292,17 @@ int proc_autoassign(lss_master *m) {
                 m->result.status = LSS_OK;
                 if (todo_take(s, m->devices, m->n_devices) < 0)
                         continue;
+                s->given_before = count_given(s);
                 s->i_pc = 0;
                 PT_CALL(&s->pc, handle_found(m, s));
+                /* A slave whose fastscan confirmation (or ping) answer came
+                 * after the wait entered configuration state uncounted and
+                 * sat out the rest of that enumeration; the switch to waiting
+                 * at its end freed it. So scan blind again while a blind
+                 * enumeration still gave somebody a node-ID. */
+                if (s->pair == s->plan->n_map && count_given(s) > s->given_before &&
+                    ++s->blind_passes < LSS_NODE_ID_MAX)
+                        s->pair--; /* the loop's ++ comes back to the blind enumeration */
         }
 
         /* 4. what the map has and the bus has not */

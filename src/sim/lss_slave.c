@@ -236,12 +236,18 @@ static void fastscan(lss_slave *s, const lss_frame *f) {
         uint32_t mask = UINT32_MAX << bitcheck;
         if ((lss_identity_field(&s->id, sub) ^ idnumber) & mask)
                 return;
+        /* lssnext going back (to vendor) after the last field: found */
+        bool found = bitcheck == 0 && (next < sub || early_config_after(s, sub));
+        if (found && s->faults.late_found_us > 0 && !s->late_found_sent) {
+                /* the confirmation a master must not take for the next step's answer */
+                s->late_found_sent = true;
+                s->tx_ready_us = s->now_us + tx_delay(s) + s->faults.late_found_us;
+        }
         answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
         if (bitcheck != 0)
                 return;
         s->fs_sub = next;
-        /* lssnext going back (to vendor) after the last field: found */
-        if (next < sub || early_config_after(s, sub))
+        if (found)
                 enter_configuration(s);
 }
 

@@ -38,6 +38,8 @@ typedef struct lss_slave_faults {
         bool miss_activation;     /* does not hear Activate Bit Timing */
         bool duplicate_answers;   /* every answer sent twice */
         bool configure_error_specific; /* configure node-ID -> 255/spec 0x42 */
+        uint32_t late_found_us;   /* the first answer to the fastscan request that
+                                   * completes its identity comes this much later */
 } lss_slave_faults;
 
 void lss_slave_faults_default(lss_slave_faults *f);
@@ -79,6 +81,7 @@ typedef struct lss_slave {
          * before an earlier one, whatever the jitter */
         uint64_t tx_ready_us;
         unsigned changes;         /* incremented on every persistent state change */
+        bool late_found_sent;     /* late_found_us used up */
         lss_slave_emit_fn emit;
         void *userdata;
 } lss_slave;

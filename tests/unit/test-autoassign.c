@@ -139,6 +139,37 @@ START_TEST(mixed_bus_pool) {
 }
 END_TEST
 
+/* A slave whose fastscan confirmation answer comes after the wait enters
+ * configuration state uncounted and sits out the rest of that enumeration;
+ * a blind pass that gave somebody a node-ID scans again and finds it. */
+START_TEST(late_confirmation_is_not_lost) {
+        for (unsigned late = 0; late < 4; late++) {
+                membus *b = membus_new(125000);
+                lss_slave_faults f = faults_latency(1000, 300);
+                for (unsigned i = 0; i < 4; i++) {
+                        lss_identity id = { 0x300 + i, 7 * i, i, 0x5000 + 13 * i };
+                        lss_slave_faults g = f;
+                        if (i == late)
+                                g.late_found_us = 60000; /* well past any wait of a 20 ms timeout */
+                        membus_add_slave(b, &id, 0xFF, &g);
+                }
+                lss_autoassign_plan p = { .store = true, .unknown = LSS_UNKNOWN_POOL, .pool_lo = 20, .pool_hi = 30 };
+                lss_master *m = master_default();
+                ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+                for (unsigned i = 0; i < 4; i++) {
+                        const lss_slave *sl = membus_slave(b, i);
+                        const lss_outcome *o = outcome_of(m, &sl->id);
+                        ck_assert_msg(o && o->kind == LSS_OUTCOME_POOL, "late slave %u: slave %u %s", late, i,
+                                      o ? lss_outcome_name(o->kind) : "not found");
+                        ck_assert_uint_eq(sl->st.active_node_id, o->new_node_id);
+                }
+                ck_assert(all_waiting(b));
+                lss_master_free(m);
+                membus_free(b);
+        }
+}
+END_TEST
+
 START_TEST(bad_plans) {
         lss_master *m = master_default();
         lss_map_entry bad = { .id = A, .revision_known = true, .node_id = 0 };
@@ -200,6 +231,7 @@ int main(void) {
         tcase_add_test(tc, encoders_at_node_1);
         tcase_add_test(tc, mixed_bus_ignore);
         tcase_add_test(tc, mixed_bus_pool);
+        tcase_add_test(tc, late_confirmation_is_not_lost);
         tcase_add_test(tc, bad_plans);
         tcase_add_test(tc, cancel_leaves_waiting);
         tcase_add_test(tc, mapped_32);
