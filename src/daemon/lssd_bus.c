@@ -164,7 +164,10 @@ static void on_engine_progress(void *userdata, double p) {
         lssd_bus *b = userdata;
         if (!b->job || b->job->n_stages == 0)
                 return;
-        set_progress(b, ((double) b->job->stage + p) / (double) b->job->n_stages);
+        /* the engine's estimate can shrink when a scan finds more to do; a bar never goes back */
+        double v = ((double) b->job->stage + p) / (double) b->job->n_stages;
+        if (v > b->progress)
+                set_progress(b, v);
 }
 
 /* ---- driving the engine ---- */
