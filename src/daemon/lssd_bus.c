@@ -8,6 +8,7 @@
 #include <sys/epoll.h>
 #include <time.h>
 
+#include "daemon/lssd_bitrate.h"
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_jobs.h"
@@ -19,6 +20,7 @@
 #define RX_BATCH 64u
 
 static void bus_process(lssd_bus *b);
+static void bus_update_io(lssd_bus *b, bool force);
 static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata);
 
 uint64_t lssd_bus_now(lssd_bus *b) {
@@ -300,6 +302,12 @@ static void bus_process(lssd_bus *b) {
         b->processing = true;
         for (;;) {
                 bus_flush_tx(b);
+                /* SetBitrate: the engine is silent and waits for the host interface */
+                if (b->engine_running && lss_master_retune_wanted(b->engine, NULL, NULL)) {
+                        if (lssd_bitrate_retune(b))
+                                bus_update_io(b, true);
+                        continue;
+                }
                 if (b->engine_running && lss_master_done(b->engine)) {
                         b->engine_running = false;
                         bus_job_continue(b, lss_master_result(b->engine));
@@ -545,6 +553,11 @@ int lssd_bus_cancel(lssd_bus *b, const char *sender, sd_bus_error *error) {
         if (b->holder_name && !is_holder(b, sender))
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s (Acquire)", b->ifname,
                                          b->holder_name);
+        if (lssd_bitrate_uncancellable(b))
+                return sd_bus_error_setf(error, LSSD_ERROR_BUSY,
+                                         "%s: the bit-rate change is under way and cannot be cancelled (devices "
+                                         "would keep a pending rate or the bus stay split); it ends soon",
+                                         b->ifname);
         log_info("%s: cancelling %s for %s", b->ifname, lssd_job_name(b->job), sender ? sender : "?");
         lss_master_cancel(b->engine, lssd_bus_now(b));
         bus_process(b);
@@ -571,6 +584,12 @@ static void bus_after_link_change(lssd_bus *b) {
         if (old == now_state)
                 return;
 
+        if (lssd_bitrate_retuning(b)) {
+                /* our own retune (down, bit timing, up): the job goes on */
+                log_info("%s: link %s (SetBitrate retune)", b->ifname, lss_link_state_to_string(now_state));
+                bus_process(b);
+                return;
+        }
         log_notice("%s: link %s", b->ifname, lss_link_state_to_string(now_state));
         if (now_state != LSS_LINK_UP && b->engine_running) {
                 char why[64];
@@ -626,7 +645,9 @@ void lssd_bus_stop(lssd_bus *b, const char *why) {
                 free(b->holder_name);
                 b->holder_name = NULL;
         }
-        if (b->engine_running) {
+        /* a bit-rate change runs to its end (seconds): cut off it could
+         * leave devices with a pending rate or the bus split */
+        if (b->engine_running && !lssd_bitrate_uncancellable(b)) {
                 log_info("%s: cancelling %s: %s", b->ifname, lssd_job_name(b->job), why);
                 lss_master_cancel(b->engine, lssd_bus_now(b));
         }
@@ -856,8 +877,21 @@ void lssd_bus_set_config(lssd_bus *b, const lssd_bus_config *config) {
         }
         lssd_bus_config_free(b->config);
         b->config = c;
+        if (b->bitrate_set && c->bitrate != b->bitrate_set) {
+                log_notice("%s: keeping %u bit/s set by SetBitrate (the configuration says %u until lssd restarts)",
+                           b->ifname, b->bitrate_set, c->bitrate);
+                c->bitrate = b->bitrate_set;
+        }
         bus_update_timing(b);
         lssd_bus_refresh_devices(b);
+        bus_update_published(b);
+        lssd_bus_flush_changes(b);
+}
+
+void lssd_bus_set_bitrate(lssd_bus *b, uint32_t bitrate) {
+        b->bitrate_set = bitrate;
+        b->config->bitrate = bitrate;
+        bus_update_timing(b);
         bus_update_published(b);
         lssd_bus_flush_changes(b);
 }

@@ -63,6 +63,7 @@ struct lssd_bus {
         sd_bus_slot *slot;
         const char *state;               /* as published */
         uint32_t bitrate;                /* as published */
+        uint32_t bitrate_set;            /* by SetBitrate: outlives reloads of the file's value; 0 none */
         unsigned changed;                /* LSSD_BUS_CHANGED_* not yet signalled */
         bool processing;                 /* bus_process() is on the stack */
         bool removing;                   /* dropped from the configuration: free when idle */
@@ -81,6 +82,9 @@ void lssd_bus_start(lssd_bus *b);
 lssd_bus *lssd_bus_free(lssd_bus *b);
 /* A new configuration (after reload): map, timing, bit rate. */
 void lssd_bus_set_config(lssd_bus *b, const lssd_bus_config *config);
+/* The network now runs at this rate (SetBitrate): configuration, timing,
+ * Bitrate property follow; kept over reloads until lssd restarts. */
+void lssd_bus_set_bitrate(lssd_bus *b, uint32_t bitrate);
 
 /* "down", "idle", "busy", "error-passive", "bus-off" */
 const char *lssd_bus_state(const lssd_bus *b);

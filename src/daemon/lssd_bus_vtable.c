@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "daemon/lssd_bitrate.h"
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_log.h"
@@ -160,13 +161,12 @@ static int method_set_bitrate(sd_bus_message *m, void *userdata, sd_bus_error *e
         r = lssd_validate_bitrate("bitrate", bitrate, error);
         if (r < 0)
                 return r;
-        r = lssd_no_options_read(m, error);
-        if (r < 0)
-                return r;
-        r = lssd_auth_check(&b->ctx->auth, m, error);
-        if (r < 0)
-                return r;
-        return sd_bus_error_set(error, LSSD_ERROR_NOT_SUPPORTED, "SetBitrate() is not implemented yet");
+        if (delay < LSSD_SWITCH_DELAY_MIN_MS || delay > LSSD_SWITCH_DELAY_MAX_MS)
+                return sd_bus_error_setf(error, SD_BUS_ERROR_INVALID_ARGS,
+                                         "Invalid switch_delay_ms %u: must be %u..%u (the host interface is "
+                                         "retuned inside the first delay period)",
+                                         delay, LSSD_SWITCH_DELAY_MIN_MS, LSSD_SWITCH_DELAY_MAX_MS);
+        return lssd_bitrate_method(b, m, bitrate, delay, error);
 }
 
 static int method_cancel(sd_bus_message *m, void *userdata, sd_bus_error *error) {

@@ -19,6 +19,8 @@ const char *lssd_job_name(const lssd_job *j) {
                 return "Execute";
         case LSSD_JOB_AUTO_ASSIGN:
                 return "AutoAssign";
+        case LSSD_JOB_SET_BITRATE:
+                return "SetBitrate";
         default:
                 return "?";
         }
@@ -57,6 +59,7 @@ lssd_job *lssd_job_free(lssd_job *j) {
         free(j->pairs);
         free(j->found);
         free(j->map);
+        free(j->br_devices);
         free(j);
         return NULL;
 }

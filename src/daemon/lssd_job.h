@@ -23,6 +23,7 @@ typedef enum lssd_job_type {
         LSSD_JOB_RAW,     /* one raw service of the bus holder */
         LSSD_JOB_EXECUTE, /* Execute(): raw services in a row, then switch-global waiting */
         LSSD_JOB_AUTO_ASSIGN, /* AutoAssign() or the boot pass: make the bus match the map */
+        LSSD_JOB_SET_BITRATE, /* SetBitrate(): scan, then the whole network to a new rate (lssd_bitrate.c) */
         _LSSD_JOB_TYPE_MAX,
 } lssd_job_type;
 
@@ -65,6 +66,15 @@ struct lssd_job {
         lss_map_entry *map;
         bool boot;                   /* the pass at start (or when the interface appears) */
         char summary[192];           /* "<ifname>: N assigned, ..." once it ended, for logs and STATUS= */
+
+        /* SET_BITRATE (also uses pairs/found for its scan) */
+        uint32_t bitrate;
+        uint16_t switch_delay_ms;
+        bool bitrate_store, bitrate_skip_missing;
+        lss_bitrate_device *br_devices;
+        size_t n_br_devices;
+        uint64_t retune_until;       /* link events before this are our own retune */
+        int retune_error;            /* errno of a failed host retune */
 };
 
 /* "Reset", "Scan", "AssignNodeId", the raw method name, "Execute", "AutoAssign". */

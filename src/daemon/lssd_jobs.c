@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "daemon/lssd_bitrate.h"
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_jobs.h"
 #include "daemon/lssd_log.h"
@@ -249,20 +250,21 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
 /* ---- Scan: fastscan enumeration, then slowscan per vendor/product pair ---- */
 
-static int scan_start_stage(lssd_bus *b, lssd_job *j) {
+int lssd_scan_stage_start(lssd_bus *b, const lssd_job *j) {
         uint64_t now = lssd_bus_now(b);
-        int k;
         if (j->stage == 0)
-                k = lss_master_enumerate(b->engine, NULL, now);
-        else {
-                const lssd_vendor_product *p = &j->pairs[j->stage - 1];
-                lss_identify_range range = {
-                        .vendor = p->vendor, .product = p->product,
-                        .rev_lo = 0, .rev_hi = UINT32_MAX,
-                        .serial_lo = 0, .serial_hi = UINT32_MAX,
-                };
-                k = lss_master_slowscan(b->engine, &range, now);
-        }
+                return lss_master_enumerate(b->engine, NULL, now);
+        const lssd_vendor_product *p = &j->pairs[j->stage - 1];
+        lss_identify_range range = {
+                .vendor = p->vendor, .product = p->product,
+                .rev_lo = 0, .rev_hi = UINT32_MAX,
+                .serial_lo = 0, .serial_hi = UINT32_MAX,
+        };
+        return lss_master_slowscan(b->engine, &range, now);
+}
+
+static int scan_start_stage(lssd_bus *b, lssd_job *j) {
+        int k = lssd_scan_stage_start(b, j);
         return k < 0 ? job_start_failed(b, j, k) : 1;
 }
 
@@ -577,6 +579,8 @@ int lssd_job_run(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 return run_execute(b, j, r);
         case LSSD_JOB_AUTO_ASSIGN:
                 return run_autoassign(b, j, r);
+        case LSSD_JOB_SET_BITRATE:
+                return lssd_bitrate_run(b, j, r);
         default:
                 return job_start_failed(b, j, -EINVAL);
         }

@@ -11,5 +11,9 @@
  * the job is over: its reply is sent and j->result says how it ended. */
 int lssd_job_run(lssd_bus *b, lssd_job *j, const lss_result *r);
 
+/* Starts stage j->stage of a scan: 0 the fastscan enumeration, then one
+ * slowscan per vendor/product pair of j->pairs. Negative errno on failure. */
+int lssd_scan_stage_start(lssd_bus *b, const lssd_job *j);
+
 /* Ends a job that will not run (dropped from the queue) with an error reply. */
 void lssd_job_abort(lssd_job *j, const char *error_name, const char *message);

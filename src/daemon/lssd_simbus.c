@@ -113,6 +113,11 @@ void lssd_simbus_transport(lssd_simbus *s, lss_transport *ret) {
         *ret = (lss_transport) { .ops = &sim_ops, .impl = s };
 }
 
+void lssd_simbus_set_bitrate(lssd_simbus *s, uint32_t bitrate) {
+        catch_up(s);
+        membus_set_bitrate(s->bus, bitrate);
+}
+
 uint64_t lssd_simbus_next_event(lssd_simbus *s) {
         uint64_t t = membus_next_event(s->bus);
         return t == UINT64_MAX ? UINT64_MAX : t + s->t0;

@@ -17,6 +17,8 @@ int lssd_simbus_new(uint32_t bitrate, lssd_simbus **ret);
 int lssd_simbus_add_slave(lssd_simbus *s, const lss_identity *id, uint8_t node_id);
 /* The simulated bus as a transport; the transport's close() frees it. */
 void lssd_simbus_transport(lssd_simbus *s, lss_transport *ret);
+/* The simulated host controller to another rate (SetBitrate's retune). */
+void lssd_simbus_set_bitrate(lssd_simbus *s, uint32_t bitrate);
 /* When something happens next on the bus (CLOCK_MONOTONIC µs), UINT64_MAX if idle. */
 uint64_t lssd_simbus_next_event(lssd_simbus *s);
 

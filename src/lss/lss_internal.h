@@ -82,6 +82,18 @@ typedef struct lss_scan_state {
         size_t n_cand, cap_cand;
 } lss_scan_state;
 
+typedef struct lss_bitrate_state {
+        int pc;
+        lss_bitrate_params p;
+        uint8_t index, old_index;
+        bool can_revert;
+        size_t i, n_bad;
+        unsigned attempt, attempt_conflict;
+        bool committed;
+        uint64_t heard_at;      /* the slaves heard Activate Bit Timing (end of the frame on the wire) */
+        enum lss_retune retune;
+} lss_bitrate_state;
+
 typedef int (*lss_proc_fn)(lss_master *m);
 
 struct lss_master {
@@ -106,6 +118,7 @@ struct lss_master {
         lss_assign_state as;
         lss_scan_state sc;
         struct lss_aa_state *aa;
+        lss_bitrate_state br;
 
         lss_frame txq[16];
         unsigned txq_head, txq_len;

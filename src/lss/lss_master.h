@@ -148,6 +148,78 @@ int lss_master_assign(lss_master *m, const lss_identity *id, uint8_t node_id, un
 int lss_master_fastscan_assign(lss_master *m, const lss_fastscan_known *known, uint8_t node_id, unsigned flags,
                                uint64_t now);
 
+/* ---- changing the bit rate of the whole network (lss_bitrate.c) ---- */
+
+enum lss_bitrate_outcome {
+        LSS_BITRATE_PENDING = 0,    /* not got to (an earlier device stopped the procedure) */
+        LSS_BITRATE_REACHED,        /* answered the selective switch at the old rate */
+        LSS_BITRATE_UNREACHABLE,    /* no answer to the selective switch: nothing was changed */
+        LSS_BITRATE_REFUSED,        /* Configure Bit Timing answered with an error (err, spec) */
+        LSS_BITRATE_SILENT,         /* no answer to Configure Bit Timing: a refusal, never a success */
+        LSS_BITRATE_CONFIGURED,     /* accepted Configure Bit Timing (not activated) */
+        LSS_BITRATE_REVERTED,       /* had accepted, was configured back to the old rate after a refusal */
+        LSS_BITRATE_SWITCHED,       /* answers at the new rate */
+        LSS_BITRATE_STORED,         /* answers at the new rate, timing stored */
+        LSS_BITRATE_STORE_FAILED,   /* answers at the new rate, Store Configuration refused/unanswered */
+        LSS_BITRATE_LOST,           /* silent at the new rate (missed the activation?) */
+};
+
+const char *lss_bitrate_outcome_name(enum lss_bitrate_outcome o);
+
+/* One device of the network; the engine writes outcome/err/spec in place. */
+typedef struct lss_bitrate_device {
+        lss_identity id;
+        enum lss_bitrate_outcome outcome;
+        uint8_t err, spec;          /* REFUSED, STORE_FAILED: the slave's codes */
+} lss_bitrate_device;
+
+typedef struct lss_bitrate_params {
+        uint32_t bitrate;           /* new rate, a table-0 rate (100000 is index 5) */
+        uint32_t old_bitrate;       /* rate now (to configure devices back after a refusal; 0 = unknown) */
+        uint16_t delay_ms;          /* switch delay of Activate Bit Timing, 1.. */
+        bool store;                 /* Store Configuration in every switched device */
+        lss_bitrate_device *devices; /* the caller's; must live until the operation is done */
+        size_t n_devices;
+} lss_bitrate_params;
+
+/* The host interface retune the engine asks its caller for, between the
+ * activation and the verification. */
+enum lss_retune {
+        LSS_RETUNE_NONE = 0,        /* not asked (yet) */
+        LSS_RETUNE_WANTED,          /* asked, waiting for lss_master_retune_done() */
+        LSS_RETUNE_DONE,            /* the interface runs at the new rate */
+        LSS_RETUNE_SKIPPED,         /* nothing to retune (virtual interface: no bit timing) */
+        LSS_RETUNE_FAILED,          /* the interface could not be retuned */
+        LSS_RETUNE_TIMEOUT,         /* the caller never answered */
+};
+
+const char *lss_retune_name(enum lss_retune r);
+
+/* The whole network to a new bit rate:
+ *   1. every device answers a selective switch (else LSS_E_NOT_FOUND, nothing changed);
+ *   2. each in turn: selective switch, Configure Bit Timing (table 0); the first
+ *      refusal or silence stops it (LSS_E_REJECTED), the devices that had
+ *      accepted are configured back to old_bitrate, nothing is activated;
+ *   3. switch global configuration, Activate Bit Timing (delay), silence; the
+ *      caller retunes the host interface when lss_master_retune_wanted() says
+ *      so and reports with lss_master_retune_done(); silence until 2 x delay;
+ *   4. switch global waiting, each device verified by selective switch and
+ *      Inquire Node-ID at the new rate (and stored when asked). A device
+ *      silent at the new rate makes the result LSS_E_INCOMPLETE (a partial
+ *      switch), a refused store LSS_E_REJECTED. Ends with every slave in
+ *      waiting. Outcomes are written into p->devices. */
+int lss_master_set_bitrate(lss_master *m, const lss_bitrate_params *p, uint64_t now);
+/* True while the engine waits for the host interface to be retuned: to
+ * `*bitrate`, best before `*deadline` (end of the first delay period). */
+bool lss_master_retune_wanted(const lss_master *m, uint32_t *bitrate, uint64_t *deadline);
+/* The caller's answer: LSS_RETUNE_DONE, _SKIPPED or _FAILED. */
+void lss_master_retune_done(lss_master *m, enum lss_retune how, uint64_t now);
+/* What happened to the host retune in the last bit-rate change. */
+enum lss_retune lss_master_retune_state(const lss_master *m);
+/* From the activation until the window is over: the bus is split if the
+ * operation stops now, so callers do not cancel it. */
+bool lss_master_bitrate_committed(const lss_master *m);
+
 /* ---- driving ---- */
 void lss_master_on_frame(lss_master *m, const lss_frame *f, uint64_t rx_us);
 void lss_master_on_time(lss_master *m, uint64_t now);
