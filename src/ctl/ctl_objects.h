@@ -1,0 +1,42 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* What lssd publishes, read in one go: the manager's properties and every
+ * bus and device object (ObjectManager.GetManagedObjects). */
+#pragma once
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "ctl/ctl.h"
+#include "ctl/ctl_errors.h"
+
+typedef struct ctl_bus_info {
+        char *path;
+        char *ifname;
+        char *state;
+        char *job;
+        uint32_t bitrate;
+        uint32_t queue_length;
+        double progress;
+} ctl_bus_info;
+
+typedef struct ctl_device_info {
+        char *path;
+        char *ifname;             /* of its bus */
+        uint32_t id[4];           /* vendor, product, revision, serial */
+        uint8_t node_id;          /* 255: non-configured */
+        uint8_t mapped_node_id;   /* 0: not in the map */
+        char *state;
+        uint64_t last_seen;       /* µs since the epoch, 0: never */
+} ctl_device_info;
+
+typedef struct ctl_objects {
+        char *version;
+        ctl_bus_info *buses;      /* in the order of Manager.Buses */
+        size_t n_buses;
+        ctl_device_info *devices; /* by bus, then identity */
+        size_t n_devices;
+} ctl_objects;
+
+/* Reads everything; errors are reported (ctl_bus_fail) and returned. */
+int ctl_objects_load(ctl_context *c, ctl_objects *ret);
+void ctl_objects_done(ctl_objects *o);

@@ -1,0 +1,411 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The verbs that start jobs on a bus (scan, auto-assign, assign,
+ * set-bitrate) and reload. */
+#include <errno.h>
+#include <inttypes.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ctl/ctl.h"
+#include "ctl/ctl_errors.h"
+#include "ctl/ctl_job.h"
+#include "ctl/ctl_json.h"
+#include "ctl/ctl_objects.h"
+#include "ctl/ctl_parse.h"
+#include "ctl/ctl_show.h"
+#include "ctl/ctl_table.h"
+
+#define DEFAULT_SWITCH_DELAY_MS 100
+
+typedef struct found {
+        const char *ifname;
+        uint32_t id[4];
+        uint8_t old_id, new_id;   /* scan: new_id is the node-ID */
+} found;
+
+typedef struct results {
+        found *v;
+        size_t n;
+} results;
+
+static int results_add(results *res, const char *ifname, const uint32_t id[4], uint8_t old_id, uint8_t new_id) {
+        found *v = realloc(res->v, (res->n + 1) * sizeof(*v));
+        if (!v)
+                return -ENOMEM;
+        res->v = v;
+        res->v[res->n++] = (found) { ifname, { id[0], id[1], id[2], id[3] }, old_id, new_id };
+        return 0;
+}
+
+/* after ^C: the job was cancelled (or still queued), lssctl exits 130 */
+static int interrupted(ctl_context *c, const char *what, const char *ifname) {
+        return ctl_fail(c, CTL_EXIT_INTERRUPTED, -EINTR, "%s on %s interrupted.", what, ifname);
+}
+
+/* a job call: message prepared by `build`, run with progress and ^C */
+static int run_job(ctl_context *c, ctl_runner *run, sd_bus_message *m, const char *path, const char *ifname,
+                   const char *job, const char *what, sd_bus_message **ret_reply) {
+        sd_bus_error error = SD_BUS_ERROR_NULL;
+        int r;
+
+        r = ctl_runner_call(run, m, path, ifname, job, ret_reply, &error);
+        if (r == -EINTR)
+                r = interrupted(c, what, ifname);
+        else if (r < 0) {
+                char *msg;
+                if (asprintf(&msg, "%s on %s failed", what, ifname) < 0)
+                        msg = NULL;
+                r = ctl_bus_fail(c, &error, r, msg ? msg : what);
+                free(msg);
+        }
+        sd_bus_error_free(&error);
+        return r;
+}
+
+static int append_bool_option(sd_bus_message *m, const char *key, bool value) {
+        return sd_bus_message_append(m, "{sv}", key, "b", value);
+}
+
+static void print_results(ctl_context *c, const results *res, bool assignments) {
+        if (c->json) {
+                ctl_json j;
+                ctl_json_init(&j, stdout);
+                ctl_json_array_begin(&j);
+                for (size_t i = 0; i < res->n; i++) {
+                        ctl_json_object_begin(&j);
+                        ctl_json_key(&j, "bus");
+                        ctl_json_string(&j, res->v[i].ifname);
+                        ctl_json_identity(&j, res->v[i].id);
+                        if (assignments) {
+                                ctl_json_key(&j, "old_node_id");
+                                ctl_json_uint(&j, res->v[i].old_id);
+                                ctl_json_key(&j, "new_node_id");
+                        } else
+                                ctl_json_key(&j, "node_id");
+                        ctl_json_uint(&j, res->v[i].new_id);
+                        ctl_json_object_end(&j);
+                }
+                ctl_json_array_end(&j);
+                ctl_json_finish(&j);
+                return;
+        }
+
+        static const char *const scan_columns[] = { "BUS", "VENDOR", "PRODUCT", "REVISION", "SERIAL", ">NODE" };
+        static const char *const assign_columns[] = { "BUS", "VENDOR", "PRODUCT", "REVISION", "SERIAL", ">OLD",
+                                                      ">NEW" };
+        ctl_table *t;
+        if (ctl_table_new(&t, assignments ? 7 : 6, assignments ? assign_columns : scan_columns) < 0)
+                return;
+        for (size_t i = 0; i < res->n; i++) {
+                const found *f = &res->v[i];
+                ctl_table_add(t, NULL, "%s", f->ifname);
+                ctl_table_identity(t, f->id);
+                if (assignments && f->old_id == 0xFF)
+                        ctl_table_add(t, NULL, "-");
+                else if (assignments)
+                        ctl_table_add(t, NULL, "%u", f->old_id);
+                if (f->new_id == 0xFF)
+                        ctl_table_add(t, CTL_ANSI_YELLOW, "-");
+                else
+                        ctl_table_add(t, NULL, "%u", f->new_id);
+        }
+        if (res->n > 0)
+                ctl_table_print(t, stdout, !c->no_legend, c->colors);
+        if (!c->no_legend) {
+                if (res->n > 0)
+                        putchar('\n');
+                if (assignments)
+                        printf("%zu node-ID%s assigned.\n", res->n, res->n == 1 ? "" : "s");
+                else
+                        printf("%zu device%s found.\n", res->n, res->n == 1 ? "" : "s");
+        }
+        ctl_table_free(t);
+}
+
+/* scan and auto-assign: the same shape, on every bus (or the --bus one) */
+static int scan_like(ctl_context *c, bool assign) {
+        const char *method = assign ? "AutoAssign" : "Scan";
+        const char *what = assign ? "Auto-assignment" : "Scan";
+        char **paths = NULL, **ifnames = NULL;
+        ctl_runner *run = NULL;
+        results res = { 0 };
+        size_t n = 0;
+        int r;
+
+        r = ctl_buses(c, &paths, &ifnames, &n);
+        if (r < 0)
+                return r;
+        if (n == 0) {
+                r = ctl_fail(c, CTL_EXIT_NOT_FOUND, -ENXIO, "lssd serves no bus.");
+                goto finish;
+        }
+        r = ctl_runner_new(c, c->stderr_tty, &run);
+        if (r < 0) {
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to set up the event loop: %s", strerror(-r));
+                goto finish;
+        }
+
+        for (size_t i = 0; i < n; i++) {
+                sd_bus_message *m = NULL, *reply = NULL;
+
+                r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, paths[i], CTL_BUS_IFACE, method);
+                if (r >= 0)
+                        r = sd_bus_message_open_container(m, 'a', "{sv}");
+                if (r >= 0 && assign && c->no_store)
+                        r = append_bool_option(m, "store", false);
+                if (r >= 0 && !assign && c->has_vendor) {
+                        r = sd_bus_message_append(m, "{sv}", "vendor", "u", c->vendor);
+                        if (r >= 0)
+                                r = sd_bus_message_append(m, "{sv}", "product", "u", c->product);
+                }
+                if (r >= 0)
+                        r = sd_bus_message_close_container(m);
+                if (r < 0) {
+                        sd_bus_message_unref(m);
+                        r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to build the call: %s", strerror(-r));
+                        goto finish;
+                }
+                r = run_job(c, run, m, paths[i], ifnames[i], method, what, &reply);
+                sd_bus_message_unref(m);
+                if (r < 0)
+                        goto finish;
+
+                r = sd_bus_message_enter_container(reply, 'a', assign ? "(uuuuyy)" : "(uuuuy)");
+                while (r > 0) {
+                        uint32_t id[4];
+                        uint8_t a = 0xFF, b = 0xFF;
+                        r = assign ? sd_bus_message_read(reply, "(uuuuyy)", &id[0], &id[1], &id[2], &id[3], &a, &b)
+                                   : sd_bus_message_read(reply, "(uuuuy)", &id[0], &id[1], &id[2], &id[3], &b);
+                        if (r > 0 && results_add(&res, ifnames[i], id, a, b) < 0)
+                                r = -ENOMEM;
+                }
+                sd_bus_message_unref(reply);
+                if (r < 0) {
+                        r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to parse lssd's answer: %s", strerror(-r));
+                        goto finish;
+                }
+        }
+        print_results(c, &res, assign);
+        r = 0;
+finish:
+        ctl_runner_free(run);
+        ctl_strv_free(paths, n);
+        ctl_strv_free(ifnames, n);
+        free(res.v);
+        return r;
+}
+
+int verb_scan(ctl_context *c) {
+        return scan_like(c, false);
+}
+
+int verb_auto_assign(ctl_context *c) {
+        return scan_like(c, true);
+}
+
+/* A bare serial: the one known device with it (on the --bus bus). */
+static int resolve_serial(ctl_context *c, uint32_t serial, uint32_t id[4], char **ret_ifname) {
+        ctl_objects o;
+        const ctl_device_info *hit = NULL;
+        size_t hits = 0;
+        int r;
+
+        r = ctl_objects_load(c, &o);
+        if (r < 0)
+                return r;
+        for (size_t i = 0; i < o.n_devices; i++) {
+                const ctl_device_info *d = &o.devices[i];
+                if (d->id[3] != serial || (c->bus_name && (!d->ifname || strcmp(d->ifname, c->bus_name) != 0)))
+                        continue;
+                hits++;
+                if (!hit)
+                        hit = d;
+        }
+        if (hits == 0)
+                r = ctl_fail(c, CTL_EXIT_NOT_FOUND, -ENXIO,
+                             "No known device has serial number 0x%08" PRIx32 "%s%s. Run 'lssctl scan' first, or "
+                             "give the whole identity VENDOR:PRODUCT:REVISION:SERIAL.",
+                             serial, c->bus_name ? " on " : "", c->bus_name ? c->bus_name : "");
+        else if (hits > 1) {
+                fprintf(stderr, "lssctl: Serial number 0x%08" PRIx32 " is ambiguous, %zu known devices have it:\n",
+                        serial, hits);
+                for (size_t i = 0; i < o.n_devices; i++) {
+                        const ctl_device_info *d = &o.devices[i];
+                        if (d->id[3] == serial &&
+                            (!c->bus_name || (d->ifname && strcmp(d->ifname, c->bus_name) == 0)))
+                                fprintf(stderr, "        0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32
+                                        " on %s\n", d->id[0], d->id[1], d->id[2], d->id[3], d->ifname);
+                }
+                r = ctl_usage(c, "Give the whole identity VENDOR:PRODUCT:REVISION:SERIAL%s.",
+                              c->bus_name ? "" : " (and --bus IFACE)");
+        } else {
+                memcpy(id, hit->id, sizeof(hit->id));
+                *ret_ifname = strdup(hit->ifname);
+                r = *ret_ifname ? 0 : -ENOMEM;
+        }
+        ctl_objects_done(&o);
+        return r;
+}
+
+/* A whole identity without --bus: the only bus, or the one that knows it. */
+static int bus_of_identity(ctl_context *c, const uint32_t id[4], char **ret_ifname) {
+        ctl_objects o;
+        const char *ifname = NULL;
+        size_t n = 0;
+        int r;
+
+        r = ctl_objects_load(c, &o);
+        if (r < 0)
+                return r;
+        if (o.n_buses == 1)
+                ifname = o.buses[0].ifname;
+        else
+                for (size_t i = 0; i < o.n_devices; i++)
+                        if (memcmp(o.devices[i].id, id, sizeof(o.devices[i].id)) == 0) {
+                                ifname = o.devices[i].ifname;
+                                n++;
+                        }
+        if (o.n_buses == 0)
+                r = ctl_fail(c, CTL_EXIT_NOT_FOUND, -ENXIO, "lssd serves no bus.");
+        else if (!ifname || n > 1)
+                r = ctl_usage(c, "lssd serves %zu buses and %s: say which one with --bus IFACE.", o.n_buses,
+                              n > 1 ? "several know this identity" : "none knows this identity");
+        else {
+                *ret_ifname = strdup(ifname);
+                r = *ret_ifname ? 0 : -ENOMEM;
+        }
+        ctl_objects_done(&o);
+        return r;
+}
+
+int verb_assign(ctl_context *c) {
+        sd_bus_message *m = NULL, *reply = NULL;
+        char *ifname = NULL, *path = NULL;
+        ctl_runner *run = NULL;
+        uint32_t id[4];
+        uint8_t node_id;
+        int r;
+
+        if (ctl_parse_node_id(c->args[1], &node_id) < 0)
+                return ctl_usage(c, "Invalid node-ID '%s': 1..127.", c->args[1]);
+        r = ctl_parse_identity(c->args[0], id);
+        if (r == -ENOENT) {
+                uint32_t serial;
+                if (ctl_parse_u32(c->args[0], &serial) < 0)
+                        return ctl_usage(c, "Invalid serial number '%s'.", c->args[0]);
+                r = resolve_serial(c, serial, id, &ifname);
+        } else if (r < 0)
+                return ctl_usage(c, "Invalid identity '%s': VENDOR:PRODUCT:REVISION:SERIAL.", c->args[0]);
+        else if (c->bus_name) {
+                ifname = strdup(c->bus_name);
+                r = ifname ? 0 : -ENOMEM;
+        } else
+                r = bus_of_identity(c, id, &ifname);
+        if (r < 0)
+                goto finish;
+
+        /* the path through lssd, which also says whether it serves that bus */
+        {
+                const char *saved = c->bus_name;
+                char **paths = NULL, **names = NULL;
+                size_t n = 0;
+                c->bus_name = ifname;
+                r = ctl_buses(c, &paths, &names, &n);
+                c->bus_name = saved;
+                if (r < 0)
+                        goto finish;
+                path = paths[0];
+                paths[0] = NULL;
+                ctl_strv_free(paths, n);
+                ctl_strv_free(names, n);
+        }
+
+        r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, path, CTL_BUS_IFACE, "AssignNodeId");
+        if (r >= 0)
+                r = sd_bus_message_append(m, "uuuuy", id[0], id[1], id[2], id[3], node_id);
+        if (r >= 0)
+                r = sd_bus_message_open_container(m, 'a', "{sv}");
+        if (r >= 0 && c->no_store)
+                r = append_bool_option(m, "store", false);
+        if (r >= 0 && c->no_verify)
+                r = append_bool_option(m, "verify", false);
+        if (r >= 0)
+                r = sd_bus_message_close_container(m);
+        if (r < 0) {
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to build the call: %s", strerror(-r));
+                goto finish;
+        }
+        r = ctl_runner_new(c, c->stderr_tty, &run);
+        if (r < 0) {
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to set up the event loop: %s", strerror(-r));
+                goto finish;
+        }
+        r = run_job(c, run, m, path, ifname, "AssignNodeId", "Assignment", &reply);
+finish:
+        ctl_runner_free(run);
+        sd_bus_message_unref(reply);
+        sd_bus_message_unref(m);
+        free(path);
+        free(ifname);
+        return r;
+}
+
+int verb_set_bitrate(ctl_context *c) {
+        sd_bus_message *m = NULL, *reply = NULL;
+        char *path = NULL, *ifname = NULL;
+        ctl_runner *run = NULL;
+        uint32_t bitrate;
+        int r;
+
+        r = ctl_parse_bitrate(c->args[0], &bitrate);
+        if (r < 0)
+                return ctl_usage(c, "Invalid bit rate '%s': one of 1000000 800000 500000 250000 125000 100000 "
+                                 "50000 20000 10000 (or 1M, 500k, ...).", c->args[0]);
+        r = ctl_pick_bus(c, &path, &ifname);
+        if (r < 0)
+                return r;
+        r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, path, CTL_BUS_IFACE, "SetBitrate");
+        if (r >= 0)
+                r = sd_bus_message_append(m, "uq", bitrate,
+                                          (uint16_t) (c->has_delay ? c->delay_ms : DEFAULT_SWITCH_DELAY_MS));
+        if (r >= 0)
+                r = sd_bus_message_open_container(m, 'a', "{sv}");
+        if (r >= 0 && c->no_store)
+                r = append_bool_option(m, "store", false);
+        if (r >= 0 && c->skip_missing)
+                r = append_bool_option(m, "skip_missing", true);
+        if (r >= 0)
+                r = sd_bus_message_close_container(m);
+        if (r < 0) {
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to build the call: %s", strerror(-r));
+                goto finish;
+        }
+        r = ctl_runner_new(c, c->stderr_tty, &run);
+        if (r < 0) {
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to set up the event loop: %s", strerror(-r));
+                goto finish;
+        }
+        r = run_job(c, run, m, path, ifname, "SetBitrate", "Bit rate change", &reply);
+finish:
+        ctl_runner_free(run);
+        sd_bus_message_unref(reply);
+        sd_bus_message_unref(m);
+        free(path);
+        free(ifname);
+        return r;
+}
+
+int verb_reload(ctl_context *c) {
+        sd_bus_error error = SD_BUS_ERROR_NULL;
+        int r;
+
+        r = ctl_connect(c);
+        if (r < 0)
+                return r;
+        r = sd_bus_call_method(c->bus, CTL_SERVICE, CTL_MANAGER_PATH, CTL_MANAGER_IFACE, "ReloadConfig", &error,
+                               NULL, NULL);
+        if (r < 0)
+                r = ctl_bus_fail(c, &error, r, "Failed to reload the configuration");
+        sd_bus_error_free(&error);
+        return r;
+}

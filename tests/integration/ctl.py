@@ -1,0 +1,707 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""lssctl integration tests: `ctl.py NAME` runs one (meson test per name).
+
+Every command runs against the real lssd (lssdtest.Env: private system bus
+with the real policy, lss-sim on vcan or lssd --simulate), asserting on
+--json output and exit codes as documented in lssctl(1). Also: the bash
+completion loads and completes, and every manual page renders without
+warnings."""
+
+import json
+import os
+import pty
+import re
+import select
+import signal
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from lssdtest import (BUS_IFACE, DEVICE_IFACE, SERVICE, SOURCE_ROOT, Env, Skip, Slave, bus_path, device_path,  # noqa: E402
+                      run)
+
+B0 = bus_path('vcan0')
+B1 = bus_path('vcan1')
+LSSCTL = os.environ.get('LSSCTL_BINARY', 'lssctl')
+
+# lssctl(1), EXIT STATUS
+EXIT = {
+    'ok': 0, 'failure': 1, 'usage': 2, 'not-running': 3, 'access-denied': 4, 'no-response': 5, 'rejected': 6,
+    'busy': 7, 'bus-down': 8, 'bus-off': 9, 'not-found': 10, 'conflict': 11, 'cancelled': 12,
+    'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'interrupted': 130,
+}
+
+SLAVES = [
+    Slave(0xEC, 0x1234, 0x00010002, 0x00001276),
+    Slave(0xEC, 0x1234, 0x00010002, 0x80002468, 6),
+    Slave(0x9A, 3, 1, 17, 7),
+    Slave(0x9A, 3, 1, 0xFFFFFFFF),
+]
+
+CONFIG = """
+lss_timeout_ms = @TIMEOUT@;
+buses = (
+  {
+    interface = "vcan0";
+    bitrate = 125000;
+    vendor = 0xEC;
+    product = 0x1234;
+    devices = (
+      { serial = 0x1276; node_id = 5; },
+      { serial = 0x80002468; node_id = 6; },
+      { vendor = 0x9A; product = 3; serial = 17; node_id = 7; }
+    );
+  }%s
+);
+"""
+
+VCAN1 = """,
+  { interface = "vcan1"; bitrate = 125000; }"""
+
+JSON_DEVICE_KEYS = ['bus', 'vendor', 'product', 'revision', 'serial', 'node_id', 'mapped_node_id', 'state',
+                    'last_seen', 'path']
+JSON_BUS_KEYS = ['interface', 'state', 'bitrate', 'job', 'progress', 'queue_length', 'devices', 'device_states']
+
+
+def expect(cond, what):
+    if not cond:
+        raise AssertionError(what)
+
+
+def expect_eq(got, want, what):
+    if got != want:
+        raise AssertionError('%s: got %r, want %r' % (what, got, want))
+
+
+def ident(s):
+    return '0x%x:0x%x:0x%x:0x%x' % s.identity
+
+
+class Result:
+    def __init__(self, args, rc, out, err):
+        self.args, self.rc, self.out, self.err = args, rc, out, err
+
+    @property
+    def json(self):
+        try:
+            return json.loads(self.out)
+        except ValueError as e:
+            raise AssertionError('lssctl %s: no JSON (%s): %r' % (' '.join(self.args), e, self.out))
+
+    def __repr__(self):
+        return 'lssctl %s: rc=%d out=%r err=%r' % (' '.join(self.args), self.rc, self.out, self.err)
+
+
+class Ctl:
+    """lssctl as users run it, on the Env's private system bus."""
+
+    def __init__(self, env):
+        self.env = env
+
+    def environ(self, **extra):
+        e = dict(os.environ, DBUS_SYSTEM_BUS_ADDRESS=self.env.address, LANG='C.UTF-8')
+        for k in ('SYSTEMD_COLORS', 'NO_COLOR', 'SYSTEMD_PAGER', 'PAGER'):
+            e.pop(k, None)
+        e.update(extra)
+        return e
+
+    def command(self, args, user=None):
+        cmd = os.environ.get('LSSCTL_TEST_WRAPPER', '').split() + [LSSCTL] + list(args)
+        if user:
+            if os.geteuid() != 0:
+                raise Skip('acting as another user needs root')
+            cmd = ['setpriv', '--reuid=' + user, '--regid=nogroup', '--clear-groups'] + cmd
+        return cmd
+
+    def __call__(self, *args, user=None, timeout=300):
+        p = subprocess.run(self.command(args, user), env=self.environ(), capture_output=True, text=True,
+                           timeout=timeout)
+        return Result(args, p.returncode, p.stdout, p.stderr)
+
+    def ok(self, *args, **kw):
+        r = self(*args, **kw)
+        expect(r.rc == 0, 'failed: %r' % r)
+        expect(r.err == '', 'stderr on success: %r' % r)
+        return r
+
+    def fails(self, code, text, *args, **kw):
+        r = self(*args, **kw)
+        expect_eq(r.rc, EXIT[code], 'exit status of lssctl %s (%r)' % (' '.join(args), r.err))
+        expect(text in r.err, 'lssctl %s: %r lacks %r' % (' '.join(args), r.err, text))
+        expect(r.out == '', 'stdout on failure: %r' % r)
+        expect(len(r.err.strip().splitlines()) <= 6, 'a long error: %r' % r.err)
+        return r
+
+    def spawn(self, *args, **kw):
+        return subprocess.Popen(self.command(args), env=self.environ(), text=True, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, **kw)
+
+    def on_tty(self, *args, timeout=120, on_output=None):
+        """Runs lssctl with stdout and stderr on a pseudo-terminal; returns (rc, output)."""
+        master, slave = pty.openpty()
+        p = subprocess.Popen(self.command(args), env=self.environ(TERM='xterm', PAGER='cat'), stdin=slave,
+                             stdout=slave, stderr=slave, start_new_session=True)
+        os.close(slave)
+        out = b''
+        deadline = time.monotonic() + timeout
+        try:
+            while time.monotonic() < deadline:
+                ready, _, _ = select.select([master], [], [], 0.1)
+                if ready:
+                    try:
+                        chunk = os.read(master, 4096)
+                    except OSError:
+                        break
+                    if not chunk:
+                        break
+                    out += chunk
+                    if on_output:
+                        on_output(p, out)
+                elif p.poll() is not None:
+                    break
+            rc = p.wait(timeout=max(1, deadline - time.monotonic()))
+        finally:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+            os.close(master)
+        return rc, out.decode(errors='replace')
+
+
+def scan_all(env):
+    env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)
+
+
+def table_columns(header):
+    """Start offsets of the columns of a table header (names separated by spaces, 'LAST SEEN' is one)."""
+    return [m.start() for m in re.finditer(r'\S+(?: SEEN)?', header)]
+
+
+# ---- listing ----
+
+def test_status():
+    with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
+        ctl = Ctl(env)
+        st = ctl.ok('status', '--json').json
+        version = subprocess.run([os.environ.get('LSSD_BINARY', 'lssd'), '--version'], capture_output=True,
+                                 text=True).stdout.split()[-1]
+        expect_eq(st['version'], version, 'version')
+        expect_eq(len(st['buses']), 1, 'buses')
+        b = st['buses'][0]
+        expect_eq(sorted(b), sorted(JSON_BUS_KEYS), 'bus keys')
+        expect_eq((b['interface'], b['state'], b['bitrate'], b['job'], b['queue_length']),
+                  ('vcan0', 'idle', 125000, '', 0), 'bus')
+        scan_all(env)
+        b = ctl.ok('--json', 'status').json['buses'][0]  # options before the command work too
+        expect_eq(b['devices'], 4, 'device count')
+        expect_eq(b['device_states'], {'assigned': 2, 'configured': 0, 'non-configured': 2, 'mismatch': 0,
+                                       'conflict': 0, 'missing': 0}, 'device states')
+        # the default command is status; text for people, no colours off a terminal
+        text = ctl.ok().out
+        expect_eq(text, ctl.ok('status').out, 'lssctl == lssctl status')
+        for want in ('Version: ' + version, 'Bus: vcan0', 'State: idle', 'Bitrate: 125 kbit/s', 'Job: none',
+                     'Devices: 4 (2 assigned, 2 non-configured)'):
+            expect(want in text, 'status lacks %r:\n%s' % (want, text))
+        expect('\x1b' not in text, 'colours off a terminal')
+        ctl.fails('not-found', "does not serve interface 'vcan9'", 'status', '--bus', 'vcan9')
+        expect_eq(ctl.ok('status', '--bus', 'vcan0', '--json').json['buses'][0]['interface'], 'vcan0', '--bus')
+
+
+def test_list():
+    with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
+        ctl = Ctl(env)
+        expect_eq(ctl.ok('list', '--json').json, [], 'list before a scan')
+        expect('0 devices listed' in ctl.ok('list').out, 'empty list text')
+        t0 = time.time()
+        scan_all(env)
+        devices = ctl.ok('list', '--json').json
+        expect_eq(len(devices), 4, 'devices')
+        mapped = {0x1276: 5, 0x80002468: 6, 17: 7, 0xFFFFFFFF: 0}
+        states = {0x1276: 'non-configured', 0x80002468: 'assigned', 17: 'assigned', 0xFFFFFFFF: 'non-configured'}
+        for d, s in zip(devices, sorted(SLAVES, key=lambda x: x.identity)):
+            expect_eq(list(d), JSON_DEVICE_KEYS, 'device keys (and their order)')
+            expect_eq((d['vendor'], d['product'], d['revision'], d['serial']), s.identity, 'identity')
+            expect_eq(d['node_id'], s.node_id, 'node_id of %x' % s.serial)
+            expect_eq(d['mapped_node_id'], mapped[s.serial], 'mapped_node_id of %x' % s.serial)
+            expect_eq(d['state'], states[s.serial], 'state of %x' % s.serial)
+            expect_eq(d['bus'], 'vcan0', 'bus')
+            expect_eq(d['path'], device_path('vcan0', *s.identity), 'path')
+            expect(t0 - 60 < d['last_seen'] / 1e6 < time.time() + 60, 'last_seen %r' % d['last_seen'])
+
+        # the table, once for shape: a header, one aligned row per device, identities in hex
+        out = ctl.ok('list').out
+        lines = out.splitlines()
+        expect_eq(lines[0].split(), ['BUS', 'VENDOR', 'PRODUCT', 'REVISION', 'SERIAL', 'NODE', 'MAPPED', 'STATE',
+                                     'LAST', 'SEEN'], 'header')
+        expect_eq(lines[5:], ['', '4 devices listed.'], 'footer')
+        cols = table_columns(lines[0])
+        rows = lines[1:5]
+        for row, s in zip(rows, sorted(SLAVES, key=lambda x: x.identity)):
+            f = row.split()
+            expect_eq(f[:5], ['vcan0'] + ['0x%08x' % v for v in s.identity], 'row ' + row)
+            expect_eq(f[5], '-' if s.node_id == 0xFF else str(s.node_id), 'NODE in ' + row)
+            expect_eq(f[7], states[s.serial], 'STATE in ' + row)
+            expect(re.match(r'\d{4}-\d\d-\d\d \d\d:\d\d:\d\d$', row[cols[8]:]), 'LAST SEEN in ' + row)
+            for c in (cols[1], cols[2], cols[3], cols[4], cols[7]):  # left-aligned columns start together
+                expect(row[c - 1] == ' ' and row[c] != ' ', 'column at %d in %r' % (c, row))
+            expect(row[cols[7] - 2] != ' ', 'MAPPED right-aligned in %r' % row)
+        expect('\x1b' not in out, 'colours off a terminal')
+        legendless = ctl.ok('list', '--no-legend').out.splitlines()
+        expect_eq([x.split() for x in legendless], [x.split() for x in rows], '--no-legend')
+
+        expect_eq(len(ctl.ok('list', '--bus', 'vcan0', '--json').json), 4, 'list --bus vcan0')
+        ctl.fails('not-found', "does not serve interface 'vcan1'", 'list', '--bus', 'vcan1')
+
+        # colours on a terminal, none with SYSTEMD_COLORS=0
+        rc, tty = ctl.on_tty('list', '--no-pager')
+        expect_eq(rc, 0, 'list on a terminal: ' + tty)
+        expect('\x1b[0;32massigned' in tty, 'colours on a terminal: %r' % tty[:300])
+
+
+def test_scan():
+    with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
+        ctl = Ctl(env)
+        found = ctl.ok('scan', '--json').json
+        expect_eq([(d['bus'], d['vendor'], d['product'], d['revision'], d['serial'], d['node_id']) for d in found],
+                  sorted([('vcan0',) + s.identity + (s.node_id,) for s in SLAVES]), 'scan --json')
+        expect_eq(list(found[0]), ['bus', 'vendor', 'product', 'revision', 'serial', 'node_id'], 'scan keys')
+        text = ctl.ok('scan').out
+        expect('4 devices found.' in text and '0x80002468' in text, 'scan text: ' + text)
+        expect_eq(len(ctl.ok('list', '--json').json), 4, 'devices after scan')
+    # no map: configured slaves only with --vendor/--product
+    with Env({'vcan0': SLAVES[:3]}) as env:
+        ctl = Ctl(env)
+        expect_eq(len(ctl.ok('scan', '--json').json), 1, 'scan without a map')
+        found = ctl.ok('scan', '--json', '--vendor', '0x9A', '--product', '3').json
+        expect_eq([d['serial'] for d in found], [17, 0x1276], 'scan --vendor 0x9A --product 3')
+        ctl.fails('usage', '--vendor and --product go together', 'scan', '--vendor', '0x9A')
+
+
+def test_scan_two_buses():
+    a, b = [Slave(0x9A, 3, 1, 0x10)], [Slave(0x9A, 3, 2, 0x20)]
+    with Env({'vcan0': a, 'vcan1': b}) as env:
+        ctl = Ctl(env)
+        found = ctl.ok('scan', '--json').json
+        expect_eq([(d['bus'], d['serial']) for d in found], [('vcan0', 0x10), ('vcan1', 0x20)], 'both buses')
+        expect_eq([d['serial'] for d in ctl.ok('scan', '--bus', 'vcan1', '--json').json], [0x20], 'scan --bus')
+        st = ctl.ok('status', '--json').json
+        expect_eq([x['interface'] for x in st['buses']], ['vcan0', 'vcan1'], 'status of two buses')
+        ctl.fails('usage', 'say which one with --bus', 'raw', 'inquire-node-id')
+        # a bare serial resolves to its bus
+        ctl.ok('assign', '0x20', '12')
+        expect_eq(env.get(device_path('vcan1', *b[0].identity), DEVICE_IFACE, 'NodeId'), 12, 'assigned on vcan1')
+
+
+# ---- assigning ----
+
+def test_assign():
+    # the same serial on two buses (lss-sim keeps one state file per serial, so not on one)
+    twin0, twin1 = Slave(0xEC, 0x1234, 0x00010002, 0x55), Slave(0xEC, 0x1234, 0x00010003, 0x55)
+    refuser = ([Slave(0xEC, 0x1234, 0x00010002, 0x4242, faults=['configure-error-specific'])]
+               if os.environ.get('LSSD_TEST_BACKEND', 'vcan') != 'simulate' else [])
+    with Env({'vcan0': SLAVES + [twin0] + refuser, 'vcan1': [twin1]}, config=CONFIG % VCAN1) as env:
+        ctl = Ctl(env)
+        ctl.fails('not-found', 'No known device has serial number 0x00001276', 'assign', '0x1276', '5')
+        scan_all(env)
+        env.call(B1, BUS_IFACE, 'Scan', 'a{sv}', 0)
+        # a bare serial, resolved through the known devices
+        ctl.ok('assign', '0x1276', '5')
+        expect_eq(env.get(device_path('vcan0', *SLAVES[0].identity), DEVICE_IFACE, 'NodeId'), 5, 'NodeId')
+        if env.real:
+            st = env.slave_state('vcan0', SLAVES[0].serial)
+            expect_eq((st['active_node_id'], st['stored_node_id']), ('5', '5'), 'stored')
+        # the whole identity, decimal works too; --no-store
+        ctl.ok('assign', '236:4660:65538:2147492968', '9', '--no-store')
+        d = [x for x in ctl.ok('list', '--json').json if x['serial'] == 0x80002468][0]
+        expect_eq((d['node_id'], d['state']), (9, 'mismatch'), 'after assign --no-store')
+        if env.real:
+            st = env.slave_state('vcan0', SLAVES[1].serial)
+            expect_eq((st['active_node_id'], st['stored_node_id']), ('9', '6'), '--no-store')
+        # ambiguous: two known devices with serial 0x55; --bus settles it
+        r = ctl.fails('usage', 'is ambiguous', 'assign', '0x55', '20')
+        expect('0x000000ec:0x00001234:0x00010002:0x00000055 on vcan0' in r.err and
+               '0x000000ec:0x00001234:0x00010003:0x00000055 on vcan1' in r.err, 'both candidates named: ' + r.err)
+        ctl.ok('assign', '0x55', '20', '--bus', 'vcan1')
+        expect_eq(env.get(device_path('vcan1', *twin1.identity), DEVICE_IFACE, 'NodeId'), 20, 'twin on vcan1')
+        ctl.ok('assign', ident(twin0), '21')
+        expect_eq(env.get(device_path('vcan0', *twin0.identity), DEVICE_IFACE, 'NodeId'), 21, 'twin on vcan0')
+        # lssd's errors, each with its exit status
+        ctl.fails('conflict', 'conflict', 'assign', ident(SLAVES[3]), '7')
+        ctl.fails('not-found', 'no such device', 'assign', '1:2:3:4', '40', '--bus', 'vcan0')
+        ctl.fails('usage', 'none knows this identity', 'assign', '1:2:3:4', '40')
+        ctl.fails('not-found', "does not serve interface 'vcan3'", 'assign', '1:2:3:4', '40', '--bus', 'vcan3')
+        for x in refuser:  # lss-sim only: the slave refuses, its codes are in the message
+            e = ctl.fails('rejected', 'the device refused the request', 'assign', ident(x), '41')
+            expect('error 255 (manufacturer-specific), spec 66' in e.err, 'Rejected message: ' + e.err)
+        # refused before asking lssd
+        for args, text in ((('0x1276', '0'), "Invalid node-ID '0'"), (('0x1276', '128'), "Invalid node-ID '128'"),
+                           (('1:2:3', '5'), "Invalid identity '1:2:3'"), (('0xZZ', '5'), "Invalid serial"),
+                           (('000000ec:1:2:3', '5'), 'Invalid identity'), (('0x1276',), 'Too few arguments')):
+            ctl.fails('usage', text, 'assign', *args)
+        ctl.fails('usage', 'does not go with', 'assign', '0x1276', '5', '--json')
+        env.alive()
+
+
+def test_auto_assign():
+    with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
+        ctl = Ctl(env)
+        got = ctl.ok('auto-assign', '--json').json
+        expect_eq(got, [{'bus': 'vcan0', 'vendor': 0xEC, 'product': 0x1234, 'revision': 0x00010002,
+                         'serial': 0x1276, 'old_node_id': 255, 'new_node_id': 5}], 'auto-assign --json')
+        expect_eq(ctl.ok('auto-assign', '--json').json, [], 'second auto-assign')
+        out = ctl.ok('auto-assign', '--no-store').out
+        expect_eq(out.strip(), '0 node-IDs assigned.', 'auto-assign text')
+        d = [x for x in ctl.ok('list', '--json').json if x['serial'] == 0x1276][0]
+        expect_eq((d['node_id'], d['state']), (5, 'assigned'), 'after auto-assign')
+
+
+def test_set_bitrate():
+    # vcan0 may change its bit rate, vcan1 may not; the map's 0x9A/3/17 is not on vcan0
+    conf = (CONFIG % VCAN1).replace('bitrate = 125000;', 'bitrate = 125000;\n    bitrate_change = true;', 1)
+    with Env({'vcan0': SLAVES[:2], 'vcan1': []}, config=conf) as env:
+        ctl = Ctl(env)
+        for bad in ('12345', '250', 'fast', '250kk', '0x3d090'):
+            ctl.fails('usage', "Invalid bit rate '%s'" % bad, 'set-bitrate', bad)
+        ctl.fails('usage', "Unknown option '-1'", 'set-bitrate', '-1')
+        ctl.fails('usage', "Invalid --delay", 'set-bitrate', '250k', '--delay', '70000')
+        ctl.fails('usage', 'does not go with', 'set-bitrate', '250k', '--no-verify')
+        ctl.fails('usage', 'say which one with --bus', 'set-bitrate', '250k')
+        ctl.fails('not-supported', 'lssd does not support this', 'set-bitrate', '250k', '--bus', 'vcan1')
+        ctl.fails('not-found', 'no such device or bus', 'set-bitrate', '250k', '--bus', 'vcan0', '--delay', '20')
+        expect_eq(env.get(B0, BUS_IFACE, 'Bitrate'), 125000, 'Bitrate after a refused change')
+        ctl.ok('set-bitrate', '250k', '--bus', 'vcan0', '--delay', '20', '--skip-missing', '--no-store')
+        expect_eq(ctl.ok('status', '--bus', 'vcan0', '--json').json['buses'][0]['bitrate'], 250000, 'bitrate')
+        env.alive()
+
+
+def test_reload():
+    with Env({'vcan0': SLAVES, 'vcan1': []}, config=CONFIG % '') as env:
+        ctl = Ctl(env)
+        with open(env.config_path, 'w') as f:
+            f.write(env.config_text(CONFIG % VCAN1))
+        ctl.ok('reload')
+        expect_eq([b['interface'] for b in ctl.ok('status', '--json').json['buses']], ['vcan0', 'vcan1'], 'reloaded')
+        with open(env.config_path, 'w') as f:
+            f.write('buses = ( { interface = "vcan0"; devices = ( { serial = 1; node_id = 200; } ); } );\n')
+        r = ctl.fails('bad-config', 'the configuration file is invalid', 'reload')
+        expect(env.config_path in r.err, 'file named: ' + r.err)
+        ctl.fails('usage', 'Too many arguments', 'reload', 'now')
+
+
+# ---- live ----
+
+def test_monitor():
+    with Env({'vcan0': SLAVES[:2]}, config=CONFIG % '') as env:
+        ctl = Ctl(env)
+        p = ctl.spawn('monitor', '--json')
+        text = ctl.spawn('monitor')
+        try:
+            for x in (p, text):
+                expect_eq(x.stderr.readline(), 'Monitoring lssd; press ^C to stop.\n', 'monitor ready')
+            scan_all(env)
+            env.call(B0, BUS_IFACE, 'AssignNodeId', 'uuuuya{sv}', *SLAVES[0].identity, 5, 0)
+            env.wait_until(lambda: env.get(B0, BUS_IFACE, 'Job') == '', what='idle')
+            time.sleep(0.5)
+        finally:
+            for x in (p, text):
+                x.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=20)
+        expect_eq(p.returncode, 0, 'monitor exit status after ^C (%r)' % err)
+        events = [json.loads(line) for line in out.splitlines()]
+        expect(all(set(e) >= {'time', 'signal', 'path', 'bus', 'args'} for e in events), 'keys: %r' % events[:2])
+        sigs = [e['signal'] for e in events]
+        for want in ('PropertiesChanged', 'DeviceFound', 'JobFinished', 'NodeIdAssigned', 'InterfacesAdded'):
+            expect(want in sigs, 'monitor saw no %s: %r' % (want, sigs))
+        d0 = device_path('vcan0', *SLAVES[0].identity)
+        nia = [e for e in events if e['signal'] == 'NodeIdAssigned'][0]
+        expect_eq((nia['bus'], nia['path'], nia['args']), ('vcan0', B0, [d0, 255, 5]), 'NodeIdAssigned')
+        jf = [e for e in events if e['signal'] == 'JobFinished'][0]
+        expect_eq(jf['args'], ['Scan', 'done'], 'JobFinished')
+        pc = [e for e in events if e['signal'] == 'PropertiesChanged' and e['path'] == B0]
+        expect(any(e['args'][1].get('Job') == 'Scan' for e in pc), 'Job=Scan change: %r' % pc[:3])
+
+        tout, _ = text.communicate(timeout=20)
+        expect_eq(text.returncode, 0, 'text monitor exit status')
+        lines = tout.splitlines()
+        expect(any(re.match(r'\d\d:\d\d:\d\d\.\d{3} vcan0 NodeIdAssigned 0x000000ec:0x00001234:0x00010002:'
+                            r'0x00001276 255 5$', x) for x in lines), 'NodeIdAssigned line: %r' % lines)
+        expect(any(re.match(r'\S+ vcan0 .*\bJob=Scan\b', x) for x in lines), 'Job=Scan line: %r' % lines)
+
+        # lssd stopping is said
+        mon = ctl.spawn('monitor', '--bus', 'vcan0')
+        expect_eq(mon.stderr.readline(), 'Monitoring lssd on vcan0; press ^C to stop.\n', 'monitor --bus ready')
+        env.stop_lssd()
+        time.sleep(0.5)
+        mon.send_signal(signal.SIGINT)
+        out, _ = mon.communicate(timeout=20)
+        expect(re.search(r'^\S+ lssd stopped$', out, re.M), 'monitor of a stopping lssd: %r' % out)
+        expect_eq(mon.returncode, 0, 'monitor exit status')
+
+
+def test_raw():
+    with Env({'vcan0': SLAVES}) as env:
+        ctl = Ctl(env)
+        s = SLAVES[0]
+        got = ctl.ok('raw', 'switch-selective', ident(s), 'inquire-node-id', 'inquire-identity',
+                     'configure-node-id', '20', 'store', 'switch-global', 'waiting', 'identify-non-configured',
+                     'fastscan', 'vendor=0x9A', '--json').json
+        expect_eq(got, [
+            {'service': 'SwitchModeSelective', 'result': True},
+            {'service': 'InquireNodeId', 'result': 255},
+            {'service': 'InquireIdentity', 'result': dict(zip(('vendor', 'product', 'revision', 'serial'),
+                                                               s.identity))},
+            {'service': 'ConfigureNodeId', 'result': None},
+            {'service': 'StoreConfiguration', 'result': None},
+            {'service': 'SwitchModeGlobal', 'result': None},
+            {'service': 'IdentifyNonConfigured', 'result': True},
+            {'service': 'Fastscan', 'result': dict(zip(('vendor', 'product', 'revision', 'serial'),
+                                                        SLAVES[3].identity))},
+        ], 'raw --json')
+        expect_eq(env.get(B0, BUS_IFACE, 'State'), 'idle', 'released after raw')
+        out = ctl.ok('raw', 'SwitchModeSelective', ident(s), 'inquire-node-id', 'identify-remote', '0x77', '3', '0',
+                     '0xffffffff', '0', '0xffffffff').out
+        expect_eq(out.splitlines(), ['switch-selective: answered', 'inquire-node-id: 20',
+                                     'identify-remote: no answer'], 'raw text')
+        if env.real:
+            env.wait_until(lambda: env.slave_state('vcan0', s.serial)['lss_state'] == 'waiting', what='waiting')
+            expect_eq(env.slave_state('vcan0', s.serial)['stored_node_id'], '20', 'stored by raw')
+        # nobody in configuration state answers an inquiry
+        ctl.fails('no-response', 'no device answered', 'raw', 'inquire-node-id')
+        expect_eq(env.get(B0, BUS_IFACE, 'State'), 'idle', 'released after NoResponse')
+        # lssd refuses an argument: exit 2, and the bus is released all the same
+        ctl.fails('usage', 'invalid argument', 'raw', 'configure-bit-timing', '0', '10')
+        expect_eq(env.get(B0, BUS_IFACE, 'State'), 'idle', 'released after a failure')
+        for args, text in ((('reboot',), "Unknown raw service 'reboot'"),
+                           (('configure-node-id',), 'needs 1 argument'),
+                           (('switch-global', 'sideways'), "Invalid mode 'sideways'"),
+                           (('fastscan', 'colour=1'), "Invalid fastscan field 'colour=1'"),
+                           (('identify-remote', '1', '2'), 'needs 6 arguments')):
+            ctl.fails('usage', text, 'raw', *args)
+        # somebody else holds the bus: Busy
+        holder = env.connect()
+        holder.call(SERVICE, B0, BUS_IFACE, 'Acquire', '', [])
+        ctl.fails('busy', 'the bus is held by another program', 'raw', 'inquire-node-id')
+        ctl.fails('busy', 'the bus is held by another program', 'scan')
+        holder.call(SERVICE, B0, BUS_IFACE, 'Release', '', [])
+        env.alive()
+
+
+def test_cancel():
+    slaves = [Slave(0x9A, 3, 1, 0x1000 + i) for i in range(6)]
+    with Env({'vcan0': slaves}) as env:
+        ctl = Ctl(env)
+        c = env.connect()
+        c.add_match("type='signal',sender='org.lssd.LSS1',interface='org.lssd.LSS1.Bus'")
+        p = ctl.spawn('scan', '--json')
+        env.wait_until(lambda: env.get(B0, BUS_IFACE, 'Job') == 'Scan', what='the scan to run')
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=60)
+        expect_eq(p.returncode, EXIT['interrupted'], 'exit status after ^C (%r)' % err)
+        expect('Scan on vcan0 interrupted' in err, 'message: %r' % err)
+        expect_eq(out, '', 'no output after ^C')
+        sig = c.wait_signal(lambda m: m.member == 'JobFinished')
+        expect(sig and sig.body == ['Scan', 'cancelled'], 'JobFinished: %r' % (sig and sig.body))
+        env.wait_until(lambda: env.get(B0, BUS_IFACE, 'Job') == '', what='idle after ^C')
+
+        # on a terminal: a progress bar while the job runs, then ^C
+        state = {'sent': False}
+
+        def interrupt_at_progress(proc, out):
+            if not state['sent'] and re.search(rb'vcan0 Scan \[[#.]{30}\] +\d+%', out):
+                state['sent'] = True
+                os.killpg(proc.pid, signal.SIGINT)  # as the terminal does
+
+        rc, tty = ctl.on_tty('scan', on_output=interrupt_at_progress)
+        expect(state['sent'], 'no progress bar on a terminal: %r' % tty[-300:])
+        expect_eq(rc, EXIT['interrupted'], 'exit status after ^C on a terminal: %r' % tty[-300:])
+        env.alive()
+
+
+# ---- failures ----
+
+def test_errors():
+    slaves = [Slave(0x9A, 3, 1, 0x1000 + i) for i in range(6)]
+    with Env({'vcan0': slaves}, lssd_args=['--queue-size', '1']) as env:
+        ctl = Ctl(env)
+        # somebody else cancels lssctl's job
+        p = ctl.spawn('scan')
+        env.wait_until(lambda: env.get(B0, BUS_IFACE, 'Job') == 'Scan', what='the scan to run')
+        env.call(B0, BUS_IFACE, 'Cancel')
+        out, err = p.communicate(timeout=60)
+        expect_eq(p.returncode, EXIT['cancelled'], 'exit status of a job cancelled by another (%r)' % err)
+        expect('Scan on vcan0 failed: the job was cancelled' in err, 'message: %r' % err)
+        # the queue is full
+        c = env.connect()
+        running = c.send(SERVICE, B0, BUS_IFACE, 'Scan', 'a{sv}', [{}])
+        env.wait_until(lambda: env.get(B0, BUS_IFACE, 'Job') == 'Scan', what='the scan to run')
+        queued = c.send(SERVICE, B0, BUS_IFACE, 'Scan', 'a{sv}', [{}])
+        env.wait_until(lambda: env.get(B0, BUS_IFACE, 'QueueLength') == 1, what='a queued scan')
+        ctl.fails('limits-exceeded', 'the job queue is full', 'scan')
+        env.call(B0, BUS_IFACE, 'Cancel')
+        for serial in (running, queued):
+            try:
+                c.wait_reply(serial, 120)
+            except Exception:  # noqa: BLE001  cancelled, or done: either is fine here
+                pass
+        env.alive()
+
+
+def test_bus_down():
+    with Env({'vcan1': SLAVES[:1]}) as env:
+        if not env.real:
+            raise Skip('needs a real interface to take down')
+        ctl = Ctl(env)
+        try:
+            subprocess.run(['ip', 'link', 'set', 'vcan1', 'down'], check=True)
+            env.wait_until(lambda: env.get(B1, BUS_IFACE, 'State') == 'down', what='State down')
+            expect_eq(ctl.ok('status', '--json').json['buses'][0]['state'], 'down', 'status of a down bus')
+            ctl.fails('bus-down', 'the CAN interface is down or not there', 'scan')
+        finally:
+            subprocess.run(['ip', 'link', 'set', 'vcan1', 'up'], check=True)
+        env.wait_until(lambda: env.get(B1, BUS_IFACE, 'State') == 'idle', what='State idle again')
+        env.alive()
+
+
+def test_not_running():
+    with Env({'vcan0': SLAVES[:1]}) as env:
+        ctl = Ctl(env)
+        env.stop_lssd()
+        for args in (('status',), ('list',), ('list', '--json'), ('scan',), ('assign', '0x1276', '5'),
+                     ('assign', '1:2:3:4', '5'), ('auto-assign',), ('set-bitrate', '250k'), ('reload',),
+                     ('monitor',), ('raw', 'inquire-node-id'), ()):
+            r = ctl.fails('not-running', 'lssd is not running.', *args)
+            expect_eq(r.err, 'lssctl: lssd is not running.\n', 'the whole message')
+        # no system bus at all
+        r = subprocess.run([LSSCTL, 'status'], capture_output=True, text=True,
+                           env=dict(ctl.environ(), DBUS_SYSTEM_BUS_ADDRESS='unix:path=/nonexistent/socket'))
+        expect_eq(r.returncode, EXIT['not-running'], 'no system bus')
+        expect('lssd is not running' in r.stderr, 'no system bus: %r' % r.stderr)
+
+
+def test_unprivileged():
+    with Env({'vcan0': SLAVES[:1]}) as env:
+        ctl = Ctl(env)
+        scan_all(env)
+        nobody = {'user': 'nobody'}
+        expect_eq(ctl.ok('status', '--json', **nobody).json['buses'][0]['devices'], 1, 'status as nobody')
+        expect_eq(len(ctl.ok('list', '--json', **nobody).json), 1, 'list as nobody')
+        for args in (('scan',), ('assign', '0x1276', '5'), ('auto-assign',), ('set-bitrate', '250k'), ('reload',),
+                     ('raw', 'inquire-node-id')):
+            ctl.fails('access-denied', "permission denied: this needs root or membership in group 'lssd'",
+                      *args, **nobody)
+        expect_eq(env.get(B0, BUS_IFACE, 'State'), 'idle', 'nothing happened')
+        env.alive()
+
+
+def test_bad_arguments():
+    with Env({'vcan0': SLAVES[:1]}) as env:
+        ctl = Ctl(env)
+        for args, text in ((('frobnicate',), "Unknown command 'frobnicate'"),
+                           (('--frobnicate',), "Unknown option '--frobnicate'"),
+                           (('list', 'extra'), "Too many arguments for 'list'"),
+                           (('status', '--no-store'), 'Option --no-store does not go with'),
+                           (('list', '--delay', '5'), 'Option --delay does not go with'),
+                           (('reload', '--bus', 'vcan0'), 'Option --bus does not go with'),
+                           (('set-bitrate',), "Too few arguments for 'set-bitrate'"),
+                           (('raw',), "Too few arguments for 'raw'"),
+                           (('list', '--json=pretty'), '--json takes no value'),
+                           (('list', '--bus'), "Option '--bus' needs a value")):
+            r = ctl.fails('usage', text, *args)
+            expect("Try 'lssctl --help'" in r.err, 'hint: %r' % r.err)
+        h = ctl.ok('--help').out
+        for verb in ('status', 'list', 'scan', 'assign', 'auto-assign', 'set-bitrate', 'reload', 'monitor', 'raw'):
+            expect(re.search(r'^  %s\b' % verb, h, re.M), '--help lacks ' + verb)
+        expect(ctl.ok('--version').out.startswith('lssctl '), '--version')
+
+
+# ---- completion and manual pages ----
+
+def complete(words, env=None):
+    """Completions bash offers for `words` (the last one is being completed)."""
+    script = os.path.join(SOURCE_ROOT, 'shell-completion', 'bash', 'lssctl')
+    line = ' '.join(words)
+    prog = ('source %s || exit 90\n'
+            'COMP_WORDS=(%s); COMP_CWORD=%d; COMP_LINE=%s; COMP_POINT=${#COMP_LINE}\n'
+            '_lssctl lssctl "${COMP_WORDS[COMP_CWORD]}" "${COMP_WORDS[COMP_CWORD-1]}" || exit 91\n'
+            'printf "%%s\\n" "${COMPREPLY[@]}"\n'
+            % (script, ' '.join("'%s'" % w for w in words), len(words) - 1, "'%s'" % line))
+    p = subprocess.run(['bash', '--norc', '--noprofile', '-c', prog], capture_output=True, text=True, env=env)
+    expect(p.returncode == 0 and p.stderr == '', 'completion of %r: rc=%d %r' % (words, p.returncode, p.stderr))
+    return sorted(x for x in p.stdout.splitlines() if x)
+
+
+def test_completion():
+    script = os.path.join(SOURCE_ROOT, 'shell-completion', 'bash', 'lssctl')
+    p = subprocess.run(['bash', '--norc', '--noprofile', '-c', 'set -u; source %s && complete -p lssctl' % script],
+                       capture_output=True, text=True)
+    expect_eq((p.returncode, p.stderr), (0, ''), 'loading the completion script')
+    expect('_lssctl' in p.stdout, 'complete -p: %r' % p.stdout)
+    expect_eq(complete(['lssctl', '']), sorted(['status', 'list', 'scan', 'assign', 'auto-assign', 'set-bitrate',
+                                                 'reload', 'monitor', 'raw']), 'commands')
+    expect_eq(complete(['lssctl', 'au']), ['auto-assign'], 'command prefix')
+    expect('--no-store' in complete(['lssctl', 'assign', '--']), 'assign options')
+    expect('--no-store' not in complete(['lssctl', 'list', '--']), 'list options')
+    expect('--json' in complete(['lssctl', 'list', '--']), 'list options')
+    expect('inquire-node-id' in complete(['lssctl', 'raw', '']), 'raw services')
+    expect('500000' in complete(['lssctl', 'set-bitrate', '']), 'bit rates')
+    with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
+        ctl = Ctl(env)
+        scan_all(env)
+        e = ctl.environ(PATH=os.path.dirname(os.path.abspath(LSSCTL)) + ':' + os.environ.get('PATH', ''))
+        expect_eq(complete(['lssctl', 'assign', ''], env=e), sorted('0x%08x' % s.serial for s in SLAVES),
+                  'known serials')
+        expect_eq(complete(['lssctl', 'assign', '0x8'], env=e), ['0x80002468'], 'serial prefix')
+
+
+MAN_PAGES = ['lssd.8', 'lssctl.1', 'lss-sim.1', 'lssd.conf.5', 'org.lssd.LSS1.5']
+
+
+def test_man():
+    if not shutil_which('man'):
+        raise Skip('man is not installed')
+    if 'vgpreload' in os.environ.get('LD_PRELOAD', ''):
+        raise Skip('under valgrind: man and groff are not ours to check')
+    for page in MAN_PAGES:
+        path = os.path.join(SOURCE_ROOT, 'man', page)
+        p = subprocess.run(['man', '--warnings', '-E', 'UTF-8', '-l', path], capture_output=True, text=True,
+                           env=dict(os.environ, MANROFFSEQ='', MANWIDTH='80', MAN_KEEP_FORMATTING='0'))
+        expect_eq((p.returncode, p.stderr), (0, ''), 'man -l %s' % page)
+        expect(len(p.stdout.splitlines()) > 20, '%s renders to almost nothing' % page)
+    # every exit status the code has is documented, with its number
+    with open(os.path.join(SOURCE_ROOT, 'man', 'lssctl.1')) as f:
+        text = f.read()
+    for code in EXIT.values():
+        expect(re.search(r'^\.IP "?%d"?$' % code, text, re.M) or
+               re.search(r'^\.TP\n\.B %d$' % code, text, re.M), 'exit status %d not in lssctl(1)' % code)
+
+
+def shutil_which(name):
+    import shutil
+    return shutil.which(name)
+
+
+TESTS = {
+    'status': test_status,
+    'list': test_list,
+    'scan': test_scan,
+    'scan-two-buses': test_scan_two_buses,
+    'assign': test_assign,
+    'auto-assign': test_auto_assign,
+    'set-bitrate': test_set_bitrate,
+    'reload': test_reload,
+    'monitor': test_monitor,
+    'raw': test_raw,
+    'cancel': test_cancel,
+    'errors': test_errors,
+    'bus-down': test_bus_down,
+    'not-running': test_not_running,
+    'unprivileged': test_unprivileged,
+    'bad-arguments': test_bad_arguments,
+    'completion': test_completion,
+    'man': test_man,
+}
+
+if __name__ == '__main__':
+    sys.exit(run(TESTS))
