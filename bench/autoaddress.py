@@ -1,0 +1,216 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""Auto-addressing on vcan: lssd AutoAssign vs python-canopen's fastscan loop.
+
+    autoaddress.py --impl lssd|canopen [--n 1,8,32] [--reps 5] [--modes mapped,vendor,serial,blind]
+
+N non-configured lss-sim slaves (vendor 0x9A, product 3, random revision and
+serial from a fixed seed per N and repetition; latency 1 ms + 0..0.3 ms
+jitter) on vcan0, 125 kbit/s. Per run: wall time of the whole procedure,
+frames on the bus (candump), the bus-time floor of those frames, lssd's CPU
+time; afterwards every slave's state file must hold the expected node-ID
+(active and stored, LSS waiting), or the bench fails.
+
+Needs root and vcan0: run it through bench/run (which uses tests/vm/run)."""
+
+import argparse
+import os
+import shutil
+import sys
+import tempfile
+import time
+import traceback
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import benchlib as bl  # noqa: E402
+
+IFNAME = 'vcan0'
+POOL = (1, 64)
+
+MODES = {
+    'mapped': 'map with full identities',
+    'vendor': 'vendor/product known (map: one absent device of that type; unknown = "pool")',
+    'serial': 'map keyed by serial (vendor/product + serial, no revision)',
+    'blind': 'blind (empty map, unknown = "pool")',
+}
+
+
+def lssd_config(mode, slaves):
+    """libconfig text for one mode; returns (text, {identity: node} or None for the pool)."""
+    head = 'buses = ( { interface = "%s"; bitrate = %d; store = true;\n' % (IFNAME, bl.BITRATE)
+    if mode == 'mapped':
+        devs = ',\n'.join('{ vendor = 0x%x; product = 0x%x; revision = 0x%x; serial = 0x%x; node_id = %d; }'
+                          % (s + (i + 1,)) for i, s in enumerate(slaves))
+        return head + 'devices = (\n%s\n); } );\n' % devs, {s: i + 1 for i, s in enumerate(slaves)}
+    if mode == 'serial':
+        devs = ',\n'.join('{ serial = 0x%x; node_id = %d; }' % (s[3], i + 1) for i, s in enumerate(slaves))
+        return (head + 'vendor = 0x%x; product = 0x%x;\ndevices = (\n%s\n); } );\n' % (bl.VENDOR, bl.PRODUCT, devs),
+                {s: i + 1 for i, s in enumerate(slaves)})
+    pool = 'unknown = "pool"; pool = [ %d, %d ];\n' % POOL
+    if mode == 'vendor':
+        # the only thing the map tells about the new devices is their vendor and product
+        taken = {s[3] for s in slaves}
+        absent = next(x for x in range(0xA0000000, 0xA0001000) if x not in taken)
+        return (head + pool + 'devices = ( { vendor = 0x%x; product = 0x%x; revision = 0; serial = 0x%x; '
+                'node_id = 127; } ); } );\n' % (bl.VENDOR, bl.PRODUCT, absent), None)
+    return head + pool + '} );\n', None
+
+
+def run_lssd(mode, n, rep, simulate=False):
+    from lssdtest import Env, Slave
+
+    slaves = bl.identities(n, bl.seed_of(n, rep))
+    conf, expected = lssd_config(mode, slaves)
+    os.environ.setdefault('LSSD_LOG_LEVEL', 'debug')  # one line per job: the engine's counters
+    os.environ['LSSD_TEST_BACKEND'] = 'simulate' if simulate else 'vcan'
+    who = 'lssd%s %s N=%d rep %d' % (' --simulate' if simulate else '', mode, n, rep)
+    with Env({IFNAME: [Slave(*s) for s in slaves]}, config=conf, candump=not simulate, sim_args=bl.SIM_ARGS) as env:
+        try:
+            return run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who)
+        except bl.BenchFailure:
+            # keep what lssd and the candump saw, for the findings
+            base = os.path.join(bl.results_dir(), 'failed-%s-%s-n%d-rep%d'
+                                % ('sim' if simulate else 'vcan', mode, n, rep))
+            shutil.copy(env.lssd_log_path, base + '.lssd.log')
+            if not simulate:
+                shutil.copy(env.candump_path, base + '.candump.log')
+            raise
+
+
+def run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who):
+    from lssdtest import BUS_IFACE, SERVICE, bus_path
+
+    c = env.connect()
+    time.sleep(0.2)  # lssd's start-up switch to waiting is not part of the run
+    cpu0 = bl.proc_cpu_s(env.lssd.pid)
+    w0, t0 = time.time(), time.monotonic()
+    reply = c.call(SERVICE, bus_path(IFNAME), BUS_IFACE, 'AutoAssign', 'a{sv}', [{}], timeout=1800)[0]
+    elapsed = time.monotonic() - t0
+    w1 = time.time()
+    cpu = bl.proc_cpu_s(env.lssd.pid) - cpu0
+    got = {tuple(r[:4]): r[5] for r in reply}
+    if expected is None:
+        ids = sorted(got.values())
+        if len(set(ids)) != len(ids) or any(not POOL[0] <= x <= POOL[1] for x in ids):
+            raise bl.BenchFailure('%s: bad pool node-IDs %r' % (who, ids))
+        expected = {s: got.get(s, 0) for s in slaves}
+    if set(got) != set(slaves) or any(got[s] != expected[s] for s in slaves):
+        raise bl.BenchFailure('%s: reply %r does not give every slave its node-ID' % (who, sorted(reply)))
+    if simulate:
+        # the slaves live inside lssd: ask each one its node-ID (selective switch + inquire)
+        now = {}
+        for ident in slaves:
+            r = c.call(SERVICE, bus_path(IFNAME), BUS_IFACE, 'Execute', 'a(sv)', [[
+                ('SwitchModeSelective', ('(uuuu)', ident)), ('InquireNodeId', ('b', True))]], timeout=60)[0]
+            now[ident] = r[1][1] if r[0] == ('b', True) else None
+        if now != expected:
+            raise bl.BenchFailure('%s: after the pass the slaves answer %r, expected %r' % (who, now, expected))
+        stats = {}
+    else:
+        time.sleep(0.3)  # let candump write the last frames
+        stats = bl.frame_stats(bl.read_candump(env.candump_path, IFNAME, w0 - 0.05, w1 + 0.05))
+        bl.check_states(env.state_dirs[IFNAME], expected, who)
+    c.close()
+    env.conns.remove(c)
+    # the engine's own account of the pass (steps, retries, timeouts, waits): the profile
+    engine = [line.split('engine: ', 1)[1] for line in env.lssd_output().splitlines()
+              if 'AutoAssign finished' in line and 'engine: ' in line]
+    return dict(stats, elapsed_s=elapsed, cpu_s=cpu, engine=engine[-1] if engine else '')
+
+
+def run_canopen(n, rep):
+    import canopen
+
+    slaves = bl.identities(n, bl.seed_of(n, rep))
+    work = tempfile.mkdtemp(prefix='lssd-bench.', dir=os.environ.get('LSSD_RUNTIME_DIR'))
+    try:
+        with bl.Procs(IFNAME, slaves, work) as procs:
+            net = canopen.Network()
+            net.connect(interface='socketcan', channel=IFNAME)
+            try:
+                found = {}
+                w0, t0 = time.time(), time.monotonic()
+                # what python-canopen's users do (its docs' LSS example, in a loop)
+                next_id = 1
+                while True:
+                    ok, lss_id = net.lss.fast_scan()
+                    if not ok:
+                        break
+                    net.lss.configure_node_id(next_id)
+                    net.lss.store_configuration()
+                    net.lss.send_switch_state_global(net.lss.WAITING_STATE)
+                    found.setdefault(tuple(lss_id), []).append(next_id)
+                    next_id += 1
+                    if next_id > n + 3:
+                        raise bl.BenchFailure('canopen N=%d rep %d: fast_scan keeps finding slaves: %r'
+                                              % (n, rep, found))
+                elapsed = time.monotonic() - t0
+                w1 = time.time()
+            finally:
+                net.disconnect()
+            time.sleep(0.3)
+            frames = bl.read_candump(procs.candump_path, IFNAME, w0 - 0.05, w1 + 0.05)
+            who = 'canopen N=%d rep %d' % (n, rep)
+            wrong = [k for k in found if k not in slaves or len(found[k]) != 1]
+            if wrong or len(found) != n:
+                raise bl.BenchFailure('%s: fast_scan reported %r, slaves are %r' % (who, found, slaves))
+            bl.check_states(procs.state_dir, {s: found[s][0] for s in slaves}, who)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return dict(bl.frame_stats(frames), elapsed_s=elapsed)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument('--impl', choices=('lssd', 'lssd-sim', 'canopen'), required=True,
+                    help='lssd-sim: lssd --simulate on the host (in-memory bus, no vcan, no VM)')
+    ap.add_argument('--n', default=None, help='comma-separated slave counts (lssd: 1,8,32; canopen: 1,8)')
+    ap.add_argument('--reps', type=int, default=None, help='repetitions per case (lssd: 5, canopen: 3)')
+    ap.add_argument('--modes', default='mapped,vendor,blind', help='lssd modes (default mapped,vendor,blind): '
+                    + ','.join(MODES))
+    a = ap.parse_args()
+    lssd = a.impl != 'canopen'
+    ns = [int(x) for x in (a.n or ('1,8,32' if lssd else '1,8')).split(',')]
+    reps = a.reps or (5 if lssd else 3)
+    modes = a.modes.split(',') if lssd else ['canopen']
+    for m in modes:
+        if lssd and m not in MODES:
+            ap.error('unknown mode ' + m)
+    if a.impl != 'lssd-sim' and not os.path.exists('/sys/class/net/' + IFNAME):
+        bl.log('%s is not there: run through bench/run (tests/vm/run)' % IFNAME)
+        return 2
+
+    failures = []
+    for n in ns:
+        for mode in modes:
+            runs = []
+            for rep in range(reps):
+                try:
+                    r = run_lssd(mode, n, rep, a.impl == 'lssd-sim') if lssd else run_canopen(n, rep)
+                except bl.BenchFailure as e:
+                    failures.append(str(e))
+                    bl.record_failure(str(e))
+                    bl.log('!!!! MIS-ASSIGNMENT / WRONG RESULT: %s' % e)
+                    r = {'failed': str(e)}
+                except Exception as e:  # noqa: BLE001
+                    failures.append('%s %s N=%d rep %d: %r' % (a.impl, mode, n, rep, e))
+                    bl.log(traceback.format_exc())
+                    r = {'failed': repr(e)}
+                r.update(rep=rep, seed=bl.seed_of(n, rep))
+                runs.append(r)
+                bl.log('%-7s %-7s N=%-3d rep %d: %s' % (a.impl, mode, n, rep, ' '.join(
+                    '%s=%s' % (k, ('%.4g' % v) if isinstance(v, float) else v) for k, v in sorted(r.items()))))
+            bl.save('autoaddress-%s-%s-n%d' % (a.impl, mode, n),
+                    {'impl': a.impl, 'mode': mode, 'n': n, 'reps': reps, 'runs': runs,
+                     'description': MODES.get(mode, 'python-canopen fast_scan loop, its defaults'),
+                     'latency_ms': bl.LATENCY_MS, 'jitter_ms': bl.JITTER_MS})
+    if failures:
+        bl.log('\n!!!! %d WRONG RESULTS — the bench FAILS:' % len(failures))
+        for f in failures:
+            bl.log('!!!!   ' + f)
+        return 1
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

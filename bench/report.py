@@ -1,0 +1,244 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""Prints the benchmark tables from the results bench/run saved
+(BUILDDIR/bench-results/*.json), the targets met or missed, and as the last
+line the speedup of lssd over python-canopen at N = 8."""
+
+import os
+import platform
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import benchlib as bl  # noqa: E402
+
+ORDER = ['mapped', 'vendor', 'serial', 'blind', 'canopen']  # modes
+LABEL = {'mapped': 'lssd, map (full identities)', 'vendor': 'lssd, vendor/product known',
+         'serial': 'lssd, map keyed by serial', 'blind': 'lssd, blind (pool)',
+         'canopen': 'python-canopen fast_scan loop'}
+SPEEDUP_NAME = {'mapped': 'mapped', 'vendor': 'known-vendor', 'blind': 'blind'}
+
+
+def machine():
+    cpu = '?'
+    try:
+        with open('/proc/cpuinfo') as f:
+            for line in f:
+                if line.startswith('model name'):
+                    cpu = line.split(':', 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return '%s, %d cores, Linux %s' % (cpu, os.cpu_count() or 0, platform.release())
+
+
+def ok_runs(case):
+    return [r for r in case['runs'] if 'failed' not in r]
+
+
+def med(runs, key):
+    s = bl.summary([r[key] for r in runs if key in r])
+    return s
+
+
+def fmt_spread(s, scale=1.0, digits=3):
+    if not s.get('n'):
+        return '-'
+    return '%.*f (%.*f-%.*f)' % (digits, s['median'] * scale, digits, s['min'] * scale, digits, s['max'] * scale)
+
+
+def canopen_waits(n, seed):
+    """python-canopen's own fixed waits for these slaves: its 0.5 s response
+    timeout for every bit nobody answers (the 1-bits of the lowest identity
+    left), its 10 ms pause after each of the 133 fastscan messages of a
+    found node, and the final ping nobody answers."""
+    total = 0.5
+    for ident in sorted(bl.identities(n, seed)):
+        total += 0.5 * sum(bin(x).count('1') for x in ident) + 133 * 0.01
+    return total
+
+
+def main():
+    res = bl.load_all()
+    print('# lssd benchmarks, %s' % machine())
+    dates = sorted({v.get('saved', '?')[:10] for v in res.values()})
+    print('# results of %s; binaries built from %s' % (', '.join(dates), ', '.join(
+        sorted({v.get('source', '?') for v in res.values()}))))
+    allcases = {(v['impl'], v['mode'], v['n']): v for k, v in res.items() if k.startswith('autoaddress-')}
+    failures = []
+    medians = {}
+    for impl, title in (('vm', 'vcan0 in the qemu/TCG VM (lss-sim, candump)'),
+                        ('lssd-sim', 'lssd --simulate on the host (in-memory bus, slaves inside lssd: '
+                                     'no frames counted)')):
+        cases = {(m, n): v for (i, m, n), v in allcases.items()
+                 if (i in ('lssd', 'canopen') if impl == 'vm' else i == impl)}
+        if not cases:
+            continue
+        print()
+        print('## Auto-addressing, %s; 125 kbit/s, N non-configured slaves (latency %s)' % (
+            title, '1 ms + 0..0.3 ms jitter' if impl == 'vm' else '0.5 ms'))
+        print('%-31s %3s %4s %-26s %8s %7s %7s %9s %7s %-22s' % (
+            'case', 'N', 'reps', 'time s: median (min-max)', 's/node', 'frames', 'LSS', 'floor ms', 'x floor',
+            'lssd CPU s: median (min-max)'))
+        for mode in ORDER:
+            for n in sorted({k[1] for k in cases}):
+                c = cases.get((mode, n))
+                if not c:
+                    continue
+                runs = ok_runs(c)
+                for r in c['runs']:
+                    if 'failed' in r:
+                        failures.append('%s %s N=%d rep %d: %s' % (c['impl'], mode, n, r['rep'], r['failed']))
+                t = med(runs, 'elapsed_s')
+                bad = len(c['runs']) - len(runs)
+                if not t.get('n'):
+                    print('%-31s %3d %4d FAILED (%d of %d runs wrong)' % (LABEL[mode], n, len(c['runs']), bad,
+                                                                         len(c['runs'])))
+                    continue
+                medians[(impl, mode, n)] = t['median']
+                fr, lss, fl = med(runs, 'frames'), med(runs, 'lss_frames'), med(runs, 'floor_s')
+                cpu = med(runs, 'cpu_s')
+                if fr.get('n'):
+                    frames = '%7d %7d %9.1f %6.1fx' % (fr['median'], lss['median'], fl['median'] * 1000,
+                                                      t['median'] / fl['median'])
+                else:
+                    frames = '%7s %7s %9s %7s' % ('-', '-', '-', '-')
+                print('%-31s %3d %4d %-26s %8.3f %s %-22s%s' % (
+                    LABEL[mode], n, len(runs), fmt_spread(t), t['median'] / n, frames,
+                    fmt_spread(cpu, digits=2) if cpu.get('n') else '-',
+                    '  + %d WRONG run(s)' % bad if bad else ''))
+    canopen = [(n, c) for (i, m, n), c in sorted(allcases.items()) if i == 'canopen']
+    for n, c in canopen:
+        runs = ok_runs(c)
+        if runs:
+            w = [canopen_waits(n, r['seed']) for r in runs]
+            t = [r['elapsed_s'] for r in runs]
+            print('# python-canopen N=%d: its own fixed waits (0.5 s timeouts, 10 ms pauses) %.1f s median = %.0f%% '
+                  'of its time' % (n, bl.summary(w)['median'], 100 * sum(w) / sum(t)))
+    if allcases:
+        print('# time: wall time of the whole procedure (one AutoAssign call; python-canopen: its loop until '
+              'fast_scan finds nothing);')
+        print('# frames: every frame on vcan0 meanwhile (candump); floor: their bus time at 125 kbit/s with exact '
+              'bit stuffing; x floor = time / floor')
+
+    # ---- targets ----
+    print()
+    print('## Targets')
+    targets = []
+    c8 = medians.get(('vm', 'canopen', 8))
+    for mode, want in (('mapped', 100), ('blind', 10)):
+        if c8 and ('vm', mode, 8) in medians:
+            x = c8 / medians[('vm', mode, 8)]
+            targets.append(('%s >= %dx faster than python-canopen at N = 8 (VM)' % (mode, want), x >= want,
+                            '%.0fx' % x))
+    for impl in ('vm', 'lssd-sim'):
+        for mode in ('mapped', 'vendor', 'serial', 'blind'):
+            if (impl, mode, 8) in medians and (impl, mode, 32) in medians:
+                r = (medians[(impl, mode, 32)] / 32) / (medians[(impl, mode, 8)] / 8)
+                targets.append(('lssd %s linear (%s): s/node N=32 within 1.2x of N=8' % (mode, impl), r <= 1.2,
+                                '%.2fx' % r))
+    n_runs = sum(len(c['runs']) for c in allcases.values())
+    try:
+        with open(os.path.join(bl.results_dir(), 'failures.log')) as f:
+            history = [line.rstrip() for line in f if line.strip()]
+    except OSError:
+        history = []
+    # failures.log has the current runs' failures too
+    earlier = max(0, len(history) - len(failures))
+    targets.append(('zero wrong results over all %d runs (+ failures.log)' % n_runs, not failures and not earlier,
+                    '%d wrong in these runs, %d in earlier runs (failures.log)' % (len(failures), earlier)))
+    fps = [res[k] for k in ('footprint-vcan', 'footprint-sim') if k in res]
+    for fp in fps:
+        if 'rss_after_scan_kib' in fp:
+            rss = fp['rss_after_scan_kib']
+            targets.append(('RSS <= 4 MiB with %d devices (%s)' % (fp['slaves'], fp['backend']), rss['VmRSS'] <= 4096,
+                            '%d KiB (anon %d KiB)' % (rss['VmRSS'], rss.get('RssAnon', 0))))
+        w = fp['idle_no_watchdog']['per_s']
+        targets.append(('0 idle wakeups/s without watchdog (%s)' % fp['backend'], w == 0, '%.3f/s' % w))
+    dl = res.get('dbus-load')
+    if dl:
+        lost = dl['gets']['lost'] + sum(j['lost'] for j in dl['jobs'])
+        targets.append(('no lost D-Bus call', lost == 0, '%d lost' % lost))
+    for what, ok, got in targets:
+        print('%-62s %-6s %s' % (what, 'MET' if ok else 'MISSED', got))
+
+    for fp in fps:
+        print()
+        print('## Footprint of lssd (%s%s)' % (fp['backend'], ', qemu/TCG VM' if fp.get('in_vm') else ''))
+
+        def rss_line(label, r):
+            extra = ', Pss %d, private dirty %d' % (r['Pss'], r['Private_Dirty']) if 'Pss' in r else ''
+            print('%-34s %5d KiB (anon %d, file %d%s; peak %d)' % (label, r['VmRSS'], r.get('RssAnon', 0),
+                                                                  r.get('RssFile', 0), extra, r.get('VmHWM', 0)))
+        rss_line('RSS after start, %d slaves' % fp['slaves'], fp['rss_start_kib'])
+        if 'rss_after_scan_kib' in fp:
+            rss_line('RSS after Scan of %d slaves' % fp['slaves'], fp['rss_after_scan_kib'])
+            print('%-34s %.1f s, lssd CPU %.2f s (%s)%s' % (
+                'Scan of %d slaves' % fp['slaves'], fp['scan']['elapsed_s'], fp['scan']['cpu_s'],
+                fp['scan']['options'], ' !!!! ' + fp['scan']['failed'] if 'failed' in fp['scan'] else ''))
+        for k, label in (('idle_no_watchdog', 'no watchdog'), ('idle_watchdog_30s', 'WATCHDOG_USEC=30 s')):
+            i = fp[k]
+            print('%-34s %d in %.0f s = %.3f/s (CPU %.2f s)%s' % (
+                'idle wakeups, ' + label, i['wakeups'], i['seconds'], i['per_s'], i['cpu_s'],
+                ', %d watchdog pings' % i['watchdog_pings_seen'] if 'watchdog_pings_seen' in i else ''))
+    for impl in ('lssd', 'lssd-sim'):
+        for mode in ('mapped', 'vendor', 'blind'):
+            c = allcases.get((impl, mode, 32))
+            if c and ok_runs(c):
+                print('CPU time of a 32-device AutoAssign (%s, %s): %s s' % (
+                    mode, 'vcan in the VM' if impl == 'lssd' else 'lssd --simulate, host',
+                    fmt_spread(med(ok_runs(c), 'cpu_s'), digits=2)))
+
+    try:
+        with open(os.path.join(bl.results_dir(), 'engine.txt')) as f:
+            engine = f.read().rstrip()
+        print()
+        print('## The engine alone (build/bench/engine-bench: in-memory bus, virtual time, floor 1 ms)')
+        print(engine)
+    except OSError:
+        pass
+
+    if dl:
+        print()
+        print('## D-Bus load (%s)' % dl['backend'])
+        print('%-58s %6s %8s %6s %9s %9s %9s  %s' % ('calls (one client connection each)', 'calls', 'answered',
+                                                   'lost', 'p50 ms', 'p99 ms', 'max ms', 'errors'))
+        g = dl['gets']
+        print('%-58s %6d %8d %6d %9.1f %9.1f %9.1f  %s' % ('Properties.Get, all at once', g['calls'], g['answered'],
+                                                          g['lost'], g['p50_ms'], g['p99_ms'], g['max_ms'],
+                                                          g['errors'] or '-'))
+        for j in dl['jobs']:
+            print('%-58s %6d %8d %6d %9.1f %9.1f %9.1f  %s' % (
+                'Execute(SwitchModeSelective, InquireNodeId), queue %s' % j['queue_size'], j['calls'], j['answered'],
+                j['lost'], j['p50_ms'], j['p99_ms'], j['max_ms'], j['errors'] or '-'))
+
+    if history:
+        print()
+        print('# wrong results recorded in earlier runs (failures.log; their case files were replaced since):')
+        for line in history:
+            print('#   ' + line[:300])
+    if failures:
+        print()
+        print('!!!! WRONG RESULTS (the bench fails):')
+        for f in failures:
+            print('!!!!  ' + f)
+    print()
+    if c8:
+        host = ['%s %.0fx' % (SPEEDUP_NAME[m], c8 / medians[('lssd-sim', m, 8)])
+                for m in ('mapped', 'vendor', 'blind') if ('lssd-sim', m, 8) in medians]
+        if host:
+            print('# context, not side by side: python-canopen (VM, %.0f%% its own fixed waits) vs lssd --simulate '
+                  '(host), N = 8: %s' % (100 * sum(canopen_waits(8, r['seed']) for r in ok_runs(allcases[
+                      ('canopen', 'canopen', 8)])) / sum(r['elapsed_s'] for r in ok_runs(allcases[
+                          ('canopen', 'canopen', 8)])), ', '.join(host)))
+        parts = []
+        for mode in ('mapped', 'vendor', 'blind'):
+            m = medians.get(('vm', mode, 8))
+            parts.append('%s %s' % (SPEEDUP_NAME[mode], ('%.0fx' % (c8 / m)) if m else '?'))
+        print('speedup vs python-canopen: ' + ', '.join(parts))
+    else:
+        print('speedup vs python-canopen: ? (no python-canopen result at N = 8: bench/run --only canopen)')
+    return 1 if failures else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
