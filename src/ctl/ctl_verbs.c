@@ -62,6 +62,20 @@ static int run_job(ctl_context *c, ctl_runner *run, sd_bus_message *m, const cha
         return r;
 }
 
+/* run_job() with its own event loop, for a single-bus job whose reply carries nothing */
+static int run_built_job(ctl_context *c, sd_bus_message *m, const char *path, const char *ifname, const char *job,
+                         const char *what) {
+        sd_bus_message *reply = NULL;
+        ctl_runner *run = NULL;
+        int r = ctl_runner_new(c, c->stderr_tty, &run);
+        if (r < 0)
+                return ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to set up the event loop: %s", strerror(-r));
+        r = run_job(c, run, m, path, ifname, job, what, &reply);
+        sd_bus_message_unref(reply);
+        ctl_runner_free(run);
+        return r;
+}
+
 static int append_bool_option(sd_bus_message *m, const char *key, bool value) {
         return sd_bus_message_append(m, "{sv}", key, "b", value);
 }
@@ -279,9 +293,8 @@ static int bus_of_identity(ctl_context *c, const uint32_t id[4], char **ret_ifna
 }
 
 int verb_assign(ctl_context *c) {
-        sd_bus_message *m = NULL, *reply = NULL;
+        sd_bus_message *m = NULL;
         char *ifname = NULL, *path = NULL;
-        ctl_runner *run = NULL;
         uint32_t id[4];
         uint8_t node_id;
         int r;
@@ -331,19 +344,11 @@ int verb_assign(ctl_context *c) {
                 r = append_bool_option(m, "verify", false);
         if (r >= 0)
                 r = sd_bus_message_close_container(m);
-        if (r < 0) {
+        if (r < 0)
                 r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to build the call: %s", strerror(-r));
-                goto finish;
-        }
-        r = ctl_runner_new(c, c->stderr_tty, &run);
-        if (r < 0) {
-                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to set up the event loop: %s", strerror(-r));
-                goto finish;
-        }
-        r = run_job(c, run, m, path, ifname, "AssignNodeId", "Assignment", &reply);
+        else
+                r = run_built_job(c, m, path, ifname, "AssignNodeId", "Assignment");
 finish:
-        ctl_runner_free(run);
-        sd_bus_message_unref(reply);
         sd_bus_message_unref(m);
         free(path);
         free(ifname);
@@ -351,9 +356,8 @@ finish:
 }
 
 int verb_set_bitrate(ctl_context *c) {
-        sd_bus_message *m = NULL, *reply = NULL;
+        sd_bus_message *m = NULL;
         char *path = NULL, *ifname = NULL;
-        ctl_runner *run = NULL;
         uint32_t bitrate;
         int r;
 
@@ -376,19 +380,10 @@ int verb_set_bitrate(ctl_context *c) {
                 r = append_bool_option(m, "skip_missing", true);
         if (r >= 0)
                 r = sd_bus_message_close_container(m);
-        if (r < 0) {
+        if (r < 0)
                 r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to build the call: %s", strerror(-r));
-                goto finish;
-        }
-        r = ctl_runner_new(c, c->stderr_tty, &run);
-        if (r < 0) {
-                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to set up the event loop: %s", strerror(-r));
-                goto finish;
-        }
-        r = run_job(c, run, m, path, ifname, "SetBitrate", "Bit rate change", &reply);
-finish:
-        ctl_runner_free(run);
-        sd_bus_message_unref(reply);
+        else
+                r = run_built_job(c, m, path, ifname, "SetBitrate", "Bit rate change");
         sd_bus_message_unref(m);
         free(path);
         free(ifname);

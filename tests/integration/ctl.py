@@ -33,32 +33,8 @@ EXIT = {
     'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'interrupted': 130,
 }
 
-SLAVES = [
-    Slave(0xEC, 0x1234, 0x00010002, 0x00001276),
-    Slave(0xEC, 0x1234, 0x00010002, 0x80002468, 6),
-    Slave(0x9A, 3, 1, 17, 7),
-    Slave(0x9A, 3, 1, 0xFFFFFFFF),
-]
-
-CONFIG = """
-lss_timeout_ms = @TIMEOUT@;
-buses = (
-  {
-    interface = "vcan0";
-    bitrate = 125000;
-    vendor = 0xEC;
-    product = 0x1234;
-    devices = (
-      { serial = 0x1276; node_id = 5; },
-      { serial = 0x80002468; node_id = 6; },
-      { vendor = 0x9A; product = 3; serial = 17; node_id = 7; }
-    );
-  }%s
-);
-"""
-
-VCAN1 = """,
-  { interface = "vcan1"; bitrate = 125000; }"""
+# the bus and map of the D-Bus tests (run.py), so both check the same devices
+from run import CONFIG, SLAVES, VCAN1  # noqa: E402
 
 JSON_DEVICE_KEYS = ['bus', 'vendor', 'product', 'revision', 'serial', 'node_id', 'mapped_node_id', 'state',
                     'last_seen', 'path']
