@@ -105,31 +105,24 @@ finish:
         return (int) n;
 }
 
-int lssd_auth_check(const lssd_auth *a, sd_bus_message *m, sd_bus_error *error) {
-        sd_bus_creds *creds = NULL;
+int lssd_auth_check_creds(const lssd_auth *a, sd_bus_creds *creds, sd_bus_message *m, sd_bus_error *error) {
         gid_t *gids = NULL;
         uid_t euid;
         int r, n = 0;
 
-        r = sd_bus_query_sender_creds(m, SD_BUS_CREDS_EUID, &creds);
-        if (r < 0)
-                return r;
         /* EUID comes from the bus (SO_PEERCRED at connect time); refuse it if
          * sd-bus had to read it from /proc instead */
-        if (sd_bus_creds_get_augmented_mask(creds) & SD_BUS_CREDS_EUID) {
-                sd_bus_creds_unref(creds);
+        if (sd_bus_creds_get_augmented_mask(creds) & SD_BUS_CREDS_EUID)
                 return sd_bus_error_set(error, SD_BUS_ERROR_ACCESS_DENIED,
                                         "The bus did not vouch for the caller's user ID");
-        }
         r = sd_bus_creds_get_euid(creds, &euid);
-        sd_bus_creds_unref(creds);
         if (r < 0)
                 return r;
 
         if (lssd_auth_allowed(a, euid, NULL, 0))
                 return 0;
 
-        if (a->have_gid) {
+        if (a->have_gid && m) {
                 n = sender_groups(m, &gids);
                 if (n > 0 && lssd_auth_allowed(a, euid, gids, (size_t) n)) {
                         free(gids);
@@ -141,4 +134,16 @@ int lssd_auth_check(const lssd_auth *a, sd_bus_message *m, sd_bus_error *error) 
         return sd_bus_error_setf(error, SD_BUS_ERROR_ACCESS_DENIED,
                                  "Sending LSS frames needs root or membership in group '%s' (caller's UID %u)",
                                  LSSD_GROUP, (unsigned) euid);
+}
+
+int lssd_auth_check(const lssd_auth *a, sd_bus_message *m, sd_bus_error *error) {
+        sd_bus_creds *creds = NULL;
+        int r;
+
+        r = sd_bus_query_sender_creds(m, SD_BUS_CREDS_EUID, &creds);
+        if (r < 0)
+                return r;
+        r = lssd_auth_check_creds(a, creds, m, error);
+        sd_bus_creds_unref(creds);
+        return r;
 }

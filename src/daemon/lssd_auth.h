@@ -27,7 +27,15 @@ void lssd_auth_init(lssd_auth *a);
  * could not tell the groups (then only the user counts). */
 bool lssd_auth_allowed(const lssd_auth *a, uid_t euid, const gid_t *gids, size_t n_gids);
 
-/* Checks the sender of `m`. 0 if allowed; otherwise sets
+/* The decision from the sender's credentials `creds` (EUID wanted). An EUID
+ * sd-bus augmented from /proc is refused whoever it names. `m` is the
+ * message the credentials came with, used only to ask the bus for the
+ * sender's groups when the user alone is not enough; NULL means no groups.
+ * Returns as lssd_auth_check(). */
+int lssd_auth_check_creds(const lssd_auth *a, sd_bus_creds *creds, sd_bus_message *m, sd_bus_error *error);
+
+/* Checks the sender of `m`: fetches its credentials and decides with
+ * lssd_auth_check_creds(). 0 if allowed; otherwise sets
  * org.freedesktop.DBus.Error.AccessDenied and returns -EACCES (or another
  * negative errno when the credentials could not be read). */
 int lssd_auth_check(const lssd_auth *a, sd_bus_message *m, sd_bus_error *error);
