@@ -3,10 +3,12 @@
 """dfuzzer against org.lssd.LSS1: `dfuzzer.py NAME` runs one (meson test per name).
 
 dfuzzer (https://github.com/dbus-fuzzer/dfuzzer; tests/install-deps builds
-it) calls every method of every object with generated arguments and reads
-every property. As root it gets past the policy and drives the jobs; as
-nobody it meets the policy. lssd must survive, and every call must get a
-reply or an error: dfuzzer fails on a crash or a call left unanswered."""
+it from tests/vendor/dfuzzer) calls every method of every object with
+generated arguments and reads every property. As root it gets past the
+policy and drives the jobs; as nobody it meets the policy. lssd must survive,
+and every call must get a reply or an error: dfuzzer fails on a crash or a
+call left unanswered. Without dfuzzer the tests FAIL, never skip: a skip
+would hide from CI that they did not run."""
 
 import os
 import shutil
@@ -21,9 +23,15 @@ SLAVES = [Slave(0xEC, 0x1234, 1, 0x1276), Slave(0x9A, 3, 1, 17, 7)]
 
 
 def dfuzzer_binary():
-    path = os.environ.get('LSSD_DFUZZER') or shutil.which('dfuzzer')
-    if not path:
-        raise Skip('dfuzzer is not installed (tests/install-deps builds it)')
+    # where tests/install-deps puts it, also when a caller's PATH lacks /usr/local/bin
+    search = os.environ.get('PATH', os.defpath) + os.pathsep + '/usr/local/bin'
+    path = os.environ.get('LSSD_DFUZZER') or shutil.which('dfuzzer', path=search)
+    assert path and os.access(path, os.X_OK), \
+        'dfuzzer not found (LSSD_DFUZZER or PATH): run tests/install-deps as root, it builds tests/vendor/dfuzzer'
+    p = subprocess.run([path, '--version'], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0 and p.stdout.startswith('dfuzzer '), \
+        '%s --version: exit %d, %r' % (path, p.returncode, (p.stdout + p.stderr).strip())
+    log(p.stdout.strip(), 'at', path)
     return path
 
 
