@@ -33,6 +33,7 @@ struct socketcan_port {
         uint64_t rx_dropped, rx_invalid, error_frames;
         uint8_t tx_errors, rx_errors;
         uint32_t ovfl_seen;     /* last SO_RXQ_OVFL count of this socket */
+        bool echo;              /* CAN_RAW_RECV_OWN_MSGS is on: our frames come back once sent */
 
         /* CLOCK_REALTIME - CLOCK_MONOTONIC at the last send/recv, see rx_time() */
         bool have_offset;
@@ -40,7 +41,8 @@ struct socketcan_port {
         uint64_t offset_at_us;
 };
 
-/* LSS responses and NMT error control (boot-up/heartbeat) only. CAN_EFF_FLAG
+/* LSS responses and NMT error control (boot-up/heartbeat) only, and our own
+ * LSS requests when the kernel echoes them (tx confirmation). CAN_EFF_FLAG
  * and CAN_RTR_FLAG are part of every mask (and clear in every id), so an
  * extended-ID or remote frame that merely looks like 0x7E4 never matches.
  * 0x701..0x77F is split into aligned power-of-two blocks to match it
@@ -48,6 +50,8 @@ struct socketcan_port {
 #define SFF_DATA(mask) (CAN_EFF_FLAG | CAN_RTR_FLAG | (mask))
 static const struct can_filter rx_filters[] = {
         { LSS_COB_SLAVE, SFF_DATA(CAN_SFF_MASK) },
+        /* 0x7E5 of other senders is dropped in recv() */
+        { LSS_COB_MASTER, SFF_DATA(CAN_SFF_MASK) },
         { 0x701, SFF_DATA(0x7FF) },     /* 0x701 */
         { 0x702, SFF_DATA(0x7FE) },     /* 0x702..0x703 */
         { 0x704, SFF_DATA(0x7FC) },     /* 0x704..0x707 */
@@ -346,9 +350,14 @@ static int open_socket(socketcan_port *p) {
         r = set_opt(p, fd, SOL_SOCKET, SO_TIMESTAMP, &one, sizeof(one));
         if (r < 0)
                 goto fail;
+        /* Our own frames come back (flagged MSG_CONFIRM) when the controller
+         * has sent them: the one sure sign that a request is on the wire, in
+         * the same queue as the answers. Without it (never seen) the engine
+         * falls back to the estimated wire time. */
+        p->echo = set_opt(p, fd, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &one, sizeof(one)) >= 0;
         /* CAN_RAW_FD_FRAMES stays off: only classic 16-byte frames can arrive.
          * CAN_RAW_LOOPBACK stays on: on vcan, other local sockets (lss-sim,
-         * candump) only see our frames through it. RECV_OWN_MSGS stays off. */
+         * candump) only see our frames through it, and the echo needs it. */
 
         r = sys->if_flags(sys->userdata, fd, p->ifname, &flags);
         if (r == -ENODEV || r == -ENXIO)
@@ -610,6 +619,12 @@ int socketcan_port_recv(socketcan_port *p, lss_frame *f, uint64_t *rx_us) {
                         p->rx_invalid++;
                         continue;
                 }
+                if (f->id == LSS_COB_MASTER && !(f->flags & LSS_FRAME_EFF)) {
+                        /* another sender's LSS request (a second master, a tool): no answer */
+                        if (!(msg.msg_flags & MSG_CONFIRM))
+                                continue;
+                        f->flags |= LSS_FRAME_ECHO;
+                }
                 if (rx_us)
                         *rx_us = rx_time(p, have_tv ? &tv : NULL);
                 return 1;
@@ -631,8 +646,13 @@ void socketcan_port_status(socketcan_port *p, lss_transport_status *st) {
                 .error_frames = p->error_frames,
                 .tx_errors = p->tx_errors,
                 .rx_errors = p->rx_errors,
+                .tx_echo = socketcan_port_echoes(p),
         };
         p->events = 0;
+}
+
+bool socketcan_port_echoes(const socketcan_port *p) {
+        return p->echo && p->fd >= 0;
 }
 
 lss_link_state socketcan_port_state(const socketcan_port *p) {

@@ -69,6 +69,8 @@ uint64_t socketcan_port_now(socketcan_port *p);
 /* Fills `st` and clears its events. */
 void socketcan_port_status(socketcan_port *p, lss_transport_status *st);
 lss_link_state socketcan_port_state(const socketcan_port *p);
+/* recv() hands back our own sent frames (LSS_FRAME_ECHO): tx confirmation. */
+bool socketcan_port_echoes(const socketcan_port *p);
 const char *socketcan_port_ifname(const socketcan_port *p);
 int socketcan_port_ifindex(const socketcan_port *p); /* 0 when gone */
 

@@ -11,6 +11,9 @@
  *  - recv() returns 1 with one frame and its receive time, 0 when nothing is
  *    pending, <0 on error (same codes as send). Frames arrive in bus order.
  *    Error frames never come out of recv(): they update the status.
+ *    When status() says tx_echo, recv() also returns each frame we sent,
+ *    flagged LSS_FRAME_ECHO, in its place among the received frames once
+ *    the controller has put it on the wire (tx confirmation).
  *  - rx times and now() are the same clock (CLOCK_MONOTONIC µs, or the
  *    virtual clock of a simulated bus). An rx time is never later than the
  *    moment the frame was really received, so the engine's drain rule
@@ -27,6 +30,7 @@
  */
 #pragma once
 
+#include <stdbool.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -67,6 +71,7 @@ typedef struct lss_transport_status {
         uint64_t error_frames;  /* error frames received, cumulative */
         uint8_t tx_errors;      /* controller error counters, when the driver reports them */
         uint8_t rx_errors;
+        bool tx_echo;           /* recv() returns our sent frames flagged LSS_FRAME_ECHO */
 } lss_transport_status;
 
 typedef struct lss_transport_ops {

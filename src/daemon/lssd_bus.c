@@ -18,6 +18,8 @@
 
 /* Frames read per wake-up before the other buses get their turn. */
 #define RX_BATCH 64u
+/* how much earlier than its write an echo may read (clock conversion error), see bus_on_echo() */
+#define ECHO_CLOCK_SLACK_US 1000u
 
 static void bus_process(lssd_bus *b);
 static void bus_update_io(lssd_bus *b, bool force);
@@ -210,8 +212,14 @@ static void bus_flush_tx(lssd_bus *b) {
                 int r = lss_transport_send(&b->transport, &f);
                 if (r < 0)
                         err = r;
-                else
+                else {
                         sent_at = t;
+                        if (f.id == LSS_COB_MASTER && f.flags == 0) {
+                                b->echo_want = f;
+                                b->echo_want_at = t;
+                                b->echo_pending = true;
+                        }
+                }
         }
         /* only when something went out: on_sent() restarts the running wait */
         if (sent_at > 0)
@@ -336,6 +344,20 @@ static void bus_process(lssd_bus *b) {
         }
 }
 
+/* Our own request came back from the controller. Only the echo of the last
+ * one written confirms the running step; an older identical request's echo
+ * is told apart by its time (a receive time may read up to the clock
+ * conversion's error early, hence the slack). */
+static void bus_on_echo(lssd_bus *b, const lss_frame *f, uint64_t rx) {
+        if (!b->echo_pending || f->id != b->echo_want.id || f->len != b->echo_want.len ||
+            memcmp(f->data, b->echo_want.data, sizeof(f->data)) != 0)
+                return;
+        if (rx + ECHO_CLOCK_SLACK_US < b->echo_want_at)
+                return;
+        b->echo_pending = false;
+        lss_master_on_tx_confirmed(b->engine, rx);
+}
+
 static void bus_poll_rx(lssd_bus *b) {
         lss_frame f;
         uint64_t rx;
@@ -345,7 +367,10 @@ static void bus_poll_rx(lssd_bus *b) {
                 r = lss_transport_recv(&b->transport, &f, &rx);
                 if (r <= 0)
                         break;
-                lss_master_on_frame(b->engine, &f, rx);
+                if (f.flags & LSS_FRAME_ECHO)
+                        bus_on_echo(b, &f, rx);
+                else
+                        lss_master_on_frame(b->engine, &f, rx);
         }
         if (r < 0 && r != -EAGAIN && r != -EINTR && r != -ENETDOWN && r != -ENODEV)
                 log_debug("%s: receive failed: %s", b->ifname, strerror(-r));
@@ -371,6 +396,10 @@ static void bus_check_status(lssd_bus *b) {
 
 static void bus_update_io(lssd_bus *b, bool force) {
         int fd = lss_transport_get_fd(&b->transport);
+        /* a new socket may echo or not; the engine applies it from its next step */
+        lss_master_set_tx_confirm(b->engine, b->port && socketcan_port_echoes(b->port));
+        if (fd != b->io_fd)
+                b->echo_pending = false;
         if (fd == b->io_fd && !force)
                 return;
         b->io_source = sd_event_source_disable_unref(b->io_source);

@@ -49,6 +49,9 @@ struct lssd_bus {
 
         lss_master *engine;
         bool engine_running;             /* we started an operation and did not collect it yet */
+        lss_frame echo_want;             /* last LSS request written: its echo confirms it is on the wire */
+        uint64_t echo_want_at;           /* when it was written */
+        bool echo_pending;
 
         lssd_job_queue queue;
         lssd_job *job;                   /* running */

@@ -43,6 +43,9 @@ typedef struct lss_step {
         lss_frame answer;      /* the first */
         bool late;             /* answered inside the late guard */
         bool void_;            /* frames were lost meanwhile: do not trust */
+        bool needs_echo;       /* tx confirmation was on when the step began */
+        bool written;          /* on_sent() came: the request was handed to the transport */
+        bool confirmed;        /* tx confirmation: the echo of the last request came back */
 } lss_step;
 
 typedef struct lss_fastscan_state {
@@ -103,6 +106,7 @@ struct lss_master {
         int pc;                 /* top-level procedure */
         bool running, done, cancelling;
         bool procedure;         /* ends with every slave in waiting, also on failure */
+        bool tx_confirm;        /* the transport echoes our frames once they are on the wire */
         uint64_t now;
 
         /* arguments and state of the running operation */
@@ -135,6 +139,8 @@ struct lss_master {
 void step_lss(lss_master *m, int expect_cs);
 void step_add_tx(lss_master *m, const lss_frame *f);
 void step_start(lss_master *m);
+/* The echo of the step's last request came back at `at` (tx confirmation). */
+void step_on_tx_confirmed(lss_master *m, uint64_t at);
 /* Switch state selective (4 frames), waiting for 0x44. */
 void step_selective(lss_master *m, const lss_identity *id);
 /* SDO upload of 0x1000 to node_id: answered means the node-ID is taken. */

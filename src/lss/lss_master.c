@@ -513,8 +513,22 @@ void lss_master_on_sent(lss_master *m, uint64_t now) {
         if (now > m->now)
                 m->now = now;
         /* timeouts run from the moment the request really left */
-        if (m->running && m->step.phase == PHASE_WAIT && now > m->step.sent_at)
-                m->step.sent_at = now;
+        if (m->running && m->step.phase == PHASE_WAIT && !m->step.confirmed) {
+                if (now > m->step.sent_at)
+                        m->step.sent_at = now;
+                m->step.written = true;
+        }
+}
+
+void lss_master_set_tx_confirm(lss_master *m, bool on) {
+        m->tx_confirm = on;
+}
+
+void lss_master_on_tx_confirmed(lss_master *m, uint64_t at) {
+        if (at > m->now)
+                m->now = at;
+        if (m->running)
+                step_on_tx_confirmed(m, at);
 }
 
 void lss_master_on_rx_lost(lss_master *m, uint64_t now) {

@@ -228,6 +228,14 @@ void lss_master_on_time(lss_master *m, uint64_t now);
  * earlier are stale: no slave answers before it has the whole request, so
  * this must never be later than that write). */
 void lss_master_on_sent(lss_master *m, uint64_t now);
+/* The transport hands back our own frames once the controller has sent
+ * them (SocketCAN's echo). Then an LSS step drains by order instead of by
+ * the estimated wire time: every frame received before the echo of the
+ * step's last request is stale, whatever its time stamp, and the wait runs
+ * from the echo. */
+void lss_master_set_tx_confirm(lss_master *m, bool on);
+/* The echo of the last frame handed out arrived, received at `at`. */
+void lss_master_on_tx_confirmed(lss_master *m, uint64_t at);
 /* The transport lost received frames (SO_RXQ_OVFL): the running step is void. */
 void lss_master_on_rx_lost(lss_master *m, uint64_t now);
 /* The transport failed: ends the operation with LSS_E_BUS_DOWN or LSS_E_BUS_OFF. */

@@ -106,7 +106,7 @@ void bootup_encode(lss_frame *f, uint8_t node_id) {
 }
 
 static bool plain_frame(const lss_frame *f) {
-        return (f->flags & (LSS_FRAME_EFF | LSS_FRAME_RTR | LSS_FRAME_FD | LSS_FRAME_ERR)) == 0;
+        return (f->flags & (LSS_FRAME_EFF | LSS_FRAME_RTR | LSS_FRAME_FD | LSS_FRAME_ERR | LSS_FRAME_ECHO)) == 0;
 }
 
 bool lss_is_response(const lss_frame *f) {

@@ -21,6 +21,7 @@
 #define LSS_FRAME_RTR 0x02u /* remote request */
 #define LSS_FRAME_FD  0x04u /* CAN FD */
 #define LSS_FRAME_ERR 0x08u /* error frame reported by the controller */
+#define LSS_FRAME_ECHO 0x10u /* our own frame, back from the controller: it is on the wire */
 
 typedef struct lss_frame {
         uint32_t id;     /* identifier without flag bits */

@@ -52,11 +52,28 @@ void step_start(lss_master *m) {
         for (unsigned i = 0; i < m->txq_len; i++)
                 s->tx_us += lss_timing_frame_us(&m->timing, &m->txq[(m->txq_head + i) % 16]);
         s->sent_at = m->now;
+        s->needs_echo = s->kind == STEP_LSS && m->tx_confirm;
         s->phase = PHASE_WAIT;
         m->stats.steps++;
         /* unconfirmed request without a wait: done as soon as it is out */
         if (s->kind == STEP_LSS && s->expect_cs < 0)
                 s->phase = PHASE_DONE;
+}
+
+void step_on_tx_confirmed(lss_master *m, uint64_t at) {
+        lss_step *s = &m->step;
+
+        /* an echo before this step's frames were written is an older frame's */
+        if (!s->needs_echo || s->confirmed || !s->written)
+                return;
+        if (s->phase != PHASE_WAIT && s->phase != PHASE_LATE_GUARD)
+                return;
+        s->confirmed = true;
+        /* the request is on the wire from now: the wait starts here, also
+         * when a busy bus held it back past the estimated deadline */
+        s->sent_at = at;
+        s->tx_us = 0;
+        s->phase = PHASE_WAIT;
 }
 
 static bool step_matches(const lss_step *s, const lss_frame *f) {
@@ -77,10 +94,17 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                 return;
         }
         /* A slave answers only after the whole request is on the wire: anything
-         * complete before that was queued earlier (the drain rule). A boot-up
-         * may overtake our queued frames (an NMT frame wins arbitration), so
-         * for it only "before we sent" is stale. */
-        if (rx < s->sent_at + (s->kind == STEP_LSS ? s->tx_us : 0)) {
+         * complete before that was queued earlier (the drain rule). With tx
+         * confirmation the echo marks that moment in the socket's own order;
+         * without it, the estimated wire time does. A boot-up may overtake
+         * our queued frames (an NMT frame wins arbitration), so for it only
+         * "before we sent" is stale. */
+        if (s->needs_echo) {
+                if (!s->confirmed) {
+                        m->stats.stale_frames++;
+                        return;
+                }
+        } else if (rx < s->sent_at + (s->kind == STEP_LSS ? s->tx_us : 0)) {
                 m->stats.stale_frames++;
                 return;
         }
@@ -90,8 +114,11 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
         }
         if (s->n_answers == 0) {
                 /* the first answer decides the step: its latency is what the wait is for */
+                /* (an rx time may read a little before the echo's: count 0) */
                 if (s->kind == STEP_LSS)
-                        lss_timing_add_sample(&m->timing, (uint32_t) (rx - s->sent_at - s->tx_us));
+                        lss_timing_add_sample(&m->timing, rx > s->sent_at + s->tx_us
+                                                                  ? (uint32_t) (rx - s->sent_at - s->tx_us)
+                                                                  : 0);
                 s->answer = *f;
                 s->n_answers = 1;
                 s->first_at = rx;

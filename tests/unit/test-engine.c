@@ -298,6 +298,112 @@ START_TEST(stale_frames_drained) {
 }
 END_TEST
 
+/* Tx confirmation (SocketCAN echo): frames before the echo of the request
+ * are stale whatever their time; after it, an answer counts even if it came
+ * sooner than the estimated wire time (a controller model without wire time,
+ * e.g. qemu's kvaser_pci), and the wait runs from the echo. */
+static lss_frame node_id_answer(uint8_t id) {
+        lss_frame f;
+        lss_frame_response(&f, LSS_CS_INQUIRE_NODE_ID);
+        f.data[1] = id;
+        return f;
+}
+
+START_TEST(tx_confirm_drains_by_echo) {
+        lss_master *m = master_default();
+        lss_frame f = node_id_answer(0x66), tx;
+
+        /* without confirmation: an answer sooner than the wire time is stale */
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, 1000), 0);
+        ck_assert(lss_master_next_tx(m, &tx));
+        lss_master_on_sent(m, 1000);
+        lss_master_on_frame(m, &f, 1100);
+        ck_assert_uint_eq(lss_master_get_stats(m)->stale_frames, 1);
+        lss_master_cancel(m, 1200);
+        while (lss_master_next_tx(m, &tx))
+                ;
+
+        lss_master_set_tx_confirm(m, true);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, 2000), 0);
+        /* an echo before our frame was written belongs to an older one */
+        lss_master_on_tx_confirmed(m, 2000);
+        ck_assert(lss_master_next_tx(m, &tx));
+        lss_master_on_sent(m, 2000);
+        /* long after the wire time, but before the echo: still stale */
+        lss_master_on_frame(m, &f, 5000);
+        ck_assert_uint_eq(lss_master_get_stats(m)->stale_frames, 2);
+        ck_assert(!lss_master_done(m));
+        uint64_t before = lss_master_deadline(m);
+        lss_master_on_tx_confirmed(m, 6000);
+        /* the wait runs from the echo (the wire time is behind us) */
+        ck_assert_uint_gt(lss_master_deadline(m), before);
+        ck_assert_uint_gt(lss_master_deadline(m), 6000);
+        /* right after the echo, sooner than any wire time: counts */
+        lss_master_on_frame(m, &f, 6010);
+        lss_master_on_time(m, lss_master_deadline(m));
+        ck_assert(lss_master_done(m));
+        ck_assert_int_eq(lss_master_result(m)->status, LSS_OK);
+        ck_assert_uint_eq(lss_master_result(m)->node_id, 0x66);
+        ck_assert_uint_eq(lss_master_get_stats(m)->stale_frames, 2);
+
+        /* kvaser_pci under qemu: echo and answer sooner than 1 frame at 125 kbit/s */
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, 20000), 0);
+        ck_assert(lss_master_next_tx(m, &tx));
+        lss_master_on_sent(m, 20000);
+        lss_master_on_tx_confirmed(m, 20005);
+        lss_master_on_frame(m, &f, 20100);
+        lss_master_on_time(m, lss_master_deadline(m));
+        ck_assert(lss_master_done(m));
+        ck_assert_int_eq(lss_master_result(m)->status, LSS_OK);
+        ck_assert_uint_eq(lss_master_get_stats(m)->stale_frames, 2);
+        lss_master_free(m);
+}
+END_TEST
+
+/* A busy bus held the request back past its wait: the echo restarts it. */
+START_TEST(tx_confirm_late_echo_restarts_wait) {
+        lss_master *m = master_default();
+        lss_frame f = node_id_answer(0x21), tx;
+
+        lss_master_set_tx_confirm(m, true);
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, 1000), 0);
+        ck_assert(lss_master_next_tx(m, &tx));
+        lss_master_on_sent(m, 1000);
+        uint64_t d = lss_master_deadline(m);
+        lss_master_on_time(m, d);
+        ck_assert_uint_eq(lss_master_get_stats(m)->timeouts, 1);
+        ck_assert(!lss_master_done(m));
+        lss_master_on_tx_confirmed(m, d + 1);
+        ck_assert_uint_gt(lss_master_deadline(m), d + 1 + 1000);
+        lss_master_on_frame(m, &f, d + 500);
+        lss_master_on_time(m, lss_master_deadline(m));
+        ck_assert(lss_master_done(m));
+        ck_assert_int_eq(lss_master_result(m)->status, LSS_OK);
+        ck_assert_uint_eq(lss_master_result(m)->node_id, 0x21);
+        ck_assert_uint_eq(lss_master_get_stats(m)->late_answers, 0);
+        lss_master_free(m);
+}
+END_TEST
+
+/* Turning confirmation on in the middle of a step applies from the next one:
+ * the running step never waits for an echo that nobody will send. */
+START_TEST(tx_confirm_switch_mid_step) {
+        lss_master *m = master_default();
+        lss_frame f = node_id_answer(0x30), tx;
+
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, 1000), 0);
+        ck_assert(lss_master_next_tx(m, &tx));
+        lss_master_on_sent(m, 1000);
+        lss_master_set_tx_confirm(m, true);
+        lss_master_on_frame(m, &f, 4000);
+        lss_master_on_time(m, lss_master_deadline(m));
+        ck_assert(lss_master_done(m));
+        ck_assert_int_eq(lss_master_result(m)->status, LSS_OK);
+        ck_assert_uint_eq(lss_master_result(m)->node_id, 0x30);
+        lss_master_free(m);
+}
+END_TEST
+
 START_TEST(busy_and_bus_errors) {
         lss_master *m = master_default();
         ck_assert_int_eq(lss_master_store(m, 0), 0);
@@ -440,6 +546,9 @@ int main(void) {
         tcase_add_test(tc, duplicate_answers_count_once);
         tcase_add_test(tc, lookalikes_ignored);
         tcase_add_test(tc, stale_frames_drained);
+        tcase_add_test(tc, tx_confirm_drains_by_echo);
+        tcase_add_test(tc, tx_confirm_late_echo_restarts_wait);
+        tcase_add_test(tc, tx_confirm_switch_mid_step);
         tcase_add_test(tc, busy_and_bus_errors);
         tcase_add_test(tc, rx_lost_voids_step);
         tcase_add_test(tc, adaptive_timing);

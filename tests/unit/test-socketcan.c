@@ -70,6 +70,7 @@ typedef struct fake {
 
         int n_open_fds;
         int next_fd;
+        int recv_own;
 
         uint64_t mono_us, real_us;
         int clock_ret;
@@ -127,6 +128,8 @@ static int f_setsockopt(void *ud, int fd, int level, int name, const void *val, 
                 memcpy(&f->rxq_ovfl, val, sizeof(int));
         } else if (level == SOL_SOCKET && name == SO_TIMESTAMP) {
                 memcpy(&f->timestamp, val, sizeof(int));
+        } else if (level == SOL_CAN_RAW && name == CAN_RAW_RECV_OWN_MSGS) {
+                memcpy(&f->recv_own, val, sizeof(int));
         }
         return 0;
 }
@@ -342,6 +345,7 @@ static lss_frame lss_req(void) {
 START_TEST(filter_array_exact) {
         static const struct can_filter want[] = {
                 { 0x7E4, CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_SFF_MASK },
+                { 0x7E5, CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_SFF_MASK },
                 { 0x701, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7FF },
                 { 0x702, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7FE },
                 { 0x704, CAN_EFF_FLAG | CAN_RTR_FLAG | 0x7FC },
@@ -366,13 +370,13 @@ START_TEST(filter_array_exact) {
 END_TEST
 
 /* The kernel's rule, (id & mask) == (filter & mask), over every identifier:
- * exactly 0x7E4, 0x701..0x77F and 0x581..0x5FF pass, as standard data frames only. */
+ * exactly 0x7E4, 0x7E5 (our echo), 0x701..0x77F and 0x581..0x5FF pass, as standard data frames only. */
 START_TEST(filter_semantics_all_ids) {
         const struct can_filter *flt;
         size_t n = socketcan_filters(&flt);
 
         for (canid_t id = 0; id <= CAN_SFF_MASK; id++) {
-                bool want = id == 0x7E4 || (id >= 0x701 && id <= 0x77F) || (id >= 0x581 && id <= 0x5FF);
+                bool want = id == 0x7E4 || id == 0x7E5 || (id >= 0x701 && id <= 0x77F) || (id >= 0x581 && id <= 0x5FF);
                 const canid_t variants[] = { id, id | CAN_RTR_FLAG, id | CAN_EFF_FLAG, id | CAN_EFF_FLAG | CAN_RTR_FLAG,
                                              id | 0x10000000u | CAN_EFF_FLAG };
 
@@ -402,7 +406,7 @@ START_TEST(open_order_and_options) {
         socketcan_port *p;
         const struct can_filter *want;
         size_t n_want = socketcan_filters(&want);
-        ssize_t i_filter = -1, i_err = -1, i_ovfl = -1, i_ts = -1, i_bind = -1, i_socket = -1;
+        ssize_t i_filter = -1, i_err = -1, i_ovfl = -1, i_ts = -1, i_own = -1, i_bind = -1, i_socket = -1;
 
         fake_reset();
         p = open_fake(NULL);
@@ -423,6 +427,8 @@ START_TEST(open_order_and_options) {
                         i_ovfl = (ssize_t) i;
                 else if (c->level == SOL_SOCKET && c->name == SO_TIMESTAMP)
                         i_ts = (ssize_t) i;
+                else if (c->level == SOL_CAN_RAW && c->name == CAN_RAW_RECV_OWN_MSGS)
+                        i_own = (ssize_t) i;
                 else
                         ck_abort_msg("unexpected setsockopt %d/%d", c->level, c->name); /* e.g. CAN_RAW_FD_FRAMES */
         }
@@ -432,6 +438,8 @@ START_TEST(open_order_and_options) {
         ck_assert_int_gt(i_err, i_socket);
         ck_assert_int_gt(i_ovfl, i_socket);
         ck_assert_int_gt(i_ts, i_socket);
+        ck_assert_int_gt(i_own, i_socket);
+        ck_assert_int_gt(i_bind, i_own);
         /* bind last of all */
         ck_assert_int_eq(i_bind, (ssize_t) F.n_calls - 1);
         ck_assert_int_gt(i_bind, i_filter);
@@ -442,6 +450,8 @@ START_TEST(open_order_and_options) {
         ck_assert_uint_eq(F.err_mask, socketcan_err_mask());
         ck_assert_int_eq(F.rxq_ovfl, 1);
         ck_assert_int_eq(F.timestamp, 1);
+        ck_assert_int_eq(F.recv_own, 1);
+        ck_assert(socketcan_port_echoes(p));
         ck_assert_int_eq(F.bound.can_family, AF_CAN);
         ck_assert_int_eq(F.bound.can_ifindex, 7);
 
@@ -514,6 +524,24 @@ START_TEST(open_setsockopt_failures) {
                 ck_assert_int_eq(F.n_open_fds, 0); /* closed again */
                 ck_assert_uint_eq(count_calls(C_BIND), 0);
         }
+}
+END_TEST
+
+/* Without echo the port works; the engine then drains by estimated wire time. */
+START_TEST(open_without_echo) {
+        socketcan_config cfg = { .sys = &fake_sys };
+        socketcan_port *p = NULL;
+        lss_transport_status st;
+
+        fake_reset();
+        F.setsockopt_fail_at = 4; /* CAN_RAW_RECV_OWN_MSGS */
+        F.setsockopt_err = -ENOPROTOOPT;
+        ck_assert_int_eq(socketcan_port_open("can0", &cfg, &p), 0);
+        ck_assert_int_eq(F.calls[F.n_calls - 1].kind, C_BIND);
+        ck_assert(!socketcan_port_echoes(p));
+        socketcan_port_status(p, &st);
+        ck_assert(!st.tx_echo);
+        socketcan_port_free(p);
 }
 END_TEST
 
@@ -844,6 +872,35 @@ START_TEST(recv_frames) {
         ck_assert(bootup_decode(&f, &nid, &st));
         ck_assert_uint_eq(nid, 5);
         ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 0);
+        socketcan_port_free(p);
+}
+END_TEST
+
+/* Our own request comes back flagged (MSG_CONFIRM) in its place among the
+ * answers; another sender's 0x7E5 is nobody's answer and never comes out. */
+START_TEST(recv_own_echo) {
+        socketcan_port *p;
+        lss_frame f;
+        uint64_t t = 0;
+        lss_transport_status st;
+
+        fake_reset();
+        p = open_fake(NULL);
+        push_rx(CAN_MTU, 0x7E5, 8);                             /* another master's */
+        push_rx(CAN_MTU, 0x7E5, 8)->msg_flags = MSG_CONFIRM;    /* ours, on the wire */
+        push_rx(CAN_MTU, 0x7E4, 8);
+        ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
+        ck_assert_uint_eq(f.id, 0x7E5);
+        ck_assert_uint_eq(f.flags, LSS_FRAME_ECHO);
+        ck_assert_uint_eq(f.len, 8);
+        ck_assert(!lss_is_response(&f));
+        ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
+        ck_assert_uint_eq(f.id, 0x7E4);
+        ck_assert_uint_eq(f.flags, 0);
+        ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 0);
+        socketcan_port_status(p, &st);
+        ck_assert(st.tx_echo);
+        ck_assert_uint_eq(st.rx_invalid, 0);
         socketcan_port_free(p);
 }
 END_TEST
@@ -1504,6 +1561,7 @@ int main(void) {
         tcase_add_test(tc, open_missing_interface);
         tcase_add_test(tc, open_no_af_can);
         tcase_add_test(tc, open_setsockopt_failures);
+        tcase_add_test(tc, open_without_echo);
         tcase_add_test(tc, open_bind_results);
         tcase_add_test(tc, open_link_down);
         tcase_add_test(tc, open_bad_names);
@@ -1514,6 +1572,7 @@ int main(void) {
         tcase_add_test(tc, send_enetdown_recovers);
         tcase_add_test(tc, send_enodev_goes_gone);
         tcase_add_test(tc, recv_frames);
+        tcase_add_test(tc, recv_own_echo);
         tcase_add_test(tc, recv_invalid_reads);
         tcase_add_test(tc, recv_batch_is_bounded);
         tcase_add_test(tc, recv_overflow_counter);
