@@ -19,7 +19,6 @@ import os
 import resource
 import selectors
 import socket
-import subprocess
 import sys
 import time
 
@@ -29,7 +28,6 @@ import benchlib as bl  # noqa: E402
 os.environ['LSSD_TEST_BACKEND'] = 'simulate'
 os.environ.setdefault('LSSD_LOG_LEVEL', 'info')
 import dbusmini  # noqa: E402
-import lssdtest  # noqa: E402
 from lssdtest import BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, SERVICE, Env, Slave, bus_path, device_path  # noqa: E402
 
 IFNAME = 'vcan0'
@@ -39,32 +37,10 @@ LIMITS = ''.join('<limit name="%s">%d</limit>' % kv for kv in (
 
 
 class LoadEnv(Env):
-    """Env whose private system bus admits thousands of clients (the
-    harness's bus start-up, with the limits added to its configuration)."""
+    """Env whose private system bus admits thousands of clients."""
 
-    def _start_dbus(self):
-        sock = os.path.join(self.dir, 'system_bus_socket')
-        self.address = 'unix:path=' + sock
-        with open(os.path.join(os.path.dirname(os.path.abspath(lssdtest.__file__)), 'system-bus.conf.in')) as f:
-            conf = f.read()
-        conf = conf.replace('@LISTEN@', self.address).replace('@EXTRA@', LIMITS)
-        conf = conf.replace('@POLICY@', os.path.join(lssdtest.SOURCE_ROOT, 'dbus', 'org.lssd.LSS1.conf'))
-        path = os.path.join(self.dir, 'bus.conf')
-        with open(path, 'w') as f:
-            f.write(conf)
-        self.dbus_log = open(os.path.join(self.dir, 'dbus.log'), 'w')
-        p = subprocess.Popen(['dbus-daemon', '--nofork', '--nopidfile', '--config-file=' + path],
-                             stdout=self.dbus_log, stderr=subprocess.STDOUT)
-        self.procs.append(p)
-        self.dbus = p
-        for _ in range(200):
-            if os.path.exists(sock):
-                break
-            if p.poll() is not None:
-                raise RuntimeError('dbus-daemon exited: ' + self.read(os.path.join(self.dir, 'dbus.log')))
-            time.sleep(0.02)
-        os.chmod(sock, 0o777)
-        os.environ['DBUS_SYSTEM_BUS_ADDRESS'] = self.address
+    def bus_config_extra(self):
+        return super().bus_config_extra() + LIMITS
 
 
 def connect(address):

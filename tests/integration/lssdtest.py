@@ -171,17 +171,20 @@ class Env:
             self._start_lssd()
             self.step('lssd ready')
 
+    def bus_config_extra(self):
+        """XML added to the private bus's configuration (subclasses add limits)."""
+        if self.override:
+            # open the bus wide: only lssd's own credential check stands
+            return ('<policy context="mandatory"><allow send_destination="org.lssd.LSS1"/>'
+                    '<allow own="org.lssd.LSS1"/></policy>')
+        return ''
+
     def _start_dbus(self):
         sock = os.path.join(self.dir, 'system_bus_socket')
         self.address = 'unix:path=' + sock
         with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), 'system-bus.conf.in')) as f:
             conf = f.read()
-        extra = ''
-        if self.override:
-            # open the bus wide: only lssd's own credential check stands
-            extra = ('<policy context="mandatory"><allow send_destination="org.lssd.LSS1"/>'
-                     '<allow own="org.lssd.LSS1"/></policy>')
-        conf = conf.replace('@LISTEN@', self.address).replace('@EXTRA@', extra)
+        conf = conf.replace('@LISTEN@', self.address).replace('@EXTRA@', self.bus_config_extra())
         conf = conf.replace('@POLICY@', os.path.join(SOURCE_ROOT, 'dbus', 'org.lssd.LSS1.conf'))
         path = os.path.join(self.dir, 'bus.conf')
         with open(path, 'w') as f:
