@@ -12,12 +12,8 @@
 /* The part shared by both ways in: the slave is the only one in configuration. */
 static int assign_tail(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->tail_pc);
-        for (s->attempt = 0;; s->attempt++) {
-                STEP_REQUEST(m, &s->tail_pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
-                if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                        break;
-                m->stats.retries++;
-        }
+        REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                        LSS_CS_INQUIRE_NODE_ID);
         if (!step_answered(m)) {
                 master_fail(m, LSS_E_NO_RESPONSE, "the selected slave did not answer Inquire Node-ID");
                 goto out;
@@ -49,13 +45,8 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                 }
         }
 
-        for (s->attempt = 0;; s->attempt++) {
-                STEP_REQUEST(m, &s->tail_pc, lss_encode_configure_node_id(&f__, s->node_id),
-                             LSS_CS_CONFIGURE_NODE_ID);
-                if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                        break;
-                m->stats.retries++;
-        }
+        REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_configure_node_id(&f__, s->node_id),
+                        LSS_CS_CONFIGURE_NODE_ID);
         if (!step_answered(m)) {
                 master_fail(m, LSS_E_NO_RESPONSE, "no answer to Configure Node-ID %u", s->node_id);
                 goto out;
@@ -74,12 +65,7 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
         m->result.changed = true;
 
         if (s->flags & LSS_ASSIGN_STORE) {
-                for (s->attempt = 0;; s->attempt++) {
-                        STEP_REQUEST(m, &s->tail_pc, lss_encode_store(&f__), LSS_CS_STORE);
-                        if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                                break;
-                        m->stats.retries++;
-                }
+                REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
                 if (!step_answered(m)) {
                         master_fail(m, LSS_E_NO_RESPONSE, "no answer to Store Configuration");
                         goto out;
@@ -132,13 +118,7 @@ int proc_assign(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->pc);
         result_reset(m);
         m->result.id = s->id;
-        for (s->attempt = 0;; s->attempt++) {
-                step_selective(m, &s->id);
-                PT_YIELD(&s->pc);
-                if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                        break;
-                m->stats.retries++;
-        }
+        SELECT_RETRIED(m, &s->pc, s->attempt, &s->id);
         if (!step_answered(m)) {
                 master_fail(m, LSS_E_NOT_FOUND, "no slave %08x:%08x:%08x:%08x answered the selective switch",
                             s->id.vendor, s->id.product, s->id.revision, s->id.serial);

@@ -90,13 +90,7 @@ static int proc_bitrate(lss_master *m) {
         /* 1. every device is there, before anything is changed */
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 progress(m, s, 0);
-                for (s->attempt = 0;; s->attempt++) {
-                        step_selective(m, &s->p.devices[s->i].id);
-                        PT_YIELD(&s->pc);
-                        if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                                break;
-                        m->stats.retries++;
-                }
+                SELECT_RETRIED(m, &s->pc, s->attempt, &s->p.devices[s->i].id);
                 s->p.devices[s->i].outcome = step_answered(m) ? LSS_BITRATE_REACHED : LSS_BITRATE_UNREACHABLE;
                 s->n_bad += !step_answered(m);
                 SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
@@ -111,13 +105,7 @@ static int proc_bitrate(lss_master *m) {
         /* 2. one by one: the new timing, stop at the first refusal */
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 progress(m, s, 1);
-                for (s->attempt = 0;; s->attempt++) {
-                        step_selective(m, &s->p.devices[s->i].id);
-                        PT_YIELD(&s->pc);
-                        if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                                break;
-                        m->stats.retries++;
-                }
+                SELECT_RETRIED(m, &s->pc, s->attempt, &s->p.devices[s->i].id);
                 if (!step_answered(m)) {
                         s->p.devices[s->i].outcome = LSS_BITRATE_UNREACHABLE;
                         master_fail(m, LSS_E_NOT_FOUND, "device %08x:%08x:%08x:%08x stopped answering",
@@ -125,13 +113,8 @@ static int proc_bitrate(lss_master *m) {
                                     s->p.devices[s->i].id.revision, s->p.devices[s->i].id.serial);
                         goto revert;
                 }
-                for (s->attempt = 0;; s->attempt++) {
-                        STEP_REQUEST(m, &s->pc, lss_encode_configure_bit_timing(&f__, 0, s->index),
-                                     LSS_CS_CONFIGURE_BIT_TIMING);
-                        if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                                break;
-                        m->stats.retries++;
-                }
+                REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_configure_bit_timing(&f__, 0, s->index),
+                                LSS_CS_CONFIGURE_BIT_TIMING);
                 if (!step_answered(m)) {
                         s->p.devices[s->i].outcome = LSS_BITRATE_SILENT;
                         master_fail(m, LSS_E_REJECTED,
@@ -212,23 +195,12 @@ static int proc_bitrate(lss_master *m) {
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 progress(m, s, 2);
                 for (s->attempt_conflict = 0;; s->attempt_conflict++) {
-                        for (s->attempt = 0;; s->attempt++) {
-                                step_selective(m, &s->p.devices[s->i].id);
-                                PT_YIELD(&s->pc);
-                                if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                                        break;
-                                m->stats.retries++;
-                        }
+                        SELECT_RETRIED(m, &s->pc, s->attempt, &s->p.devices[s->i].id);
                         if (!step_answered(m))
                                 break;
                         /* and a second, different answer: a stray 44 cannot make a device look switched */
-                        for (s->attempt = 0;; s->attempt++) {
-                                STEP_REQUEST(m, &s->pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
-                                             LSS_CS_INQUIRE_NODE_ID);
-                                if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                                        break;
-                                m->stats.retries++;
-                        }
+                        REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                        LSS_CS_INQUIRE_NODE_ID);
                         if (!step_conflict(m) || s->attempt_conflict >= m->timing.cfg.retries)
                                 break;
                         /* more than one slave still in configuration: the switch
@@ -244,12 +216,7 @@ static int proc_bitrate(lss_master *m) {
                 }
                 s->p.devices[s->i].outcome = LSS_BITRATE_SWITCHED;
                 if (s->p.store) {
-                        for (s->attempt = 0;; s->attempt++) {
-                                STEP_REQUEST(m, &s->pc, lss_encode_store(&f__), LSS_CS_STORE);
-                                if (step_answered(m) || s->attempt >= m->timing.cfg.retries)
-                                        break;
-                                m->stats.retries++;
-                        }
+                        REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
                         if (step_answered(m) && m->step.answer.data[1] == 0)
                                 s->p.devices[s->i].outcome = LSS_BITRATE_STORED;
                         else {

@@ -69,7 +69,13 @@ typedef struct lss_assign_state {
 
 typedef struct lss_range_item {
         uint32_t rlo, rhi, slo, shi;
-        bool asked_again;
+        unsigned asks;          /* times asked and silent */
+        bool root;              /* the whole range: nothing above it would notice a lost answer */
+        /* the high half of a split: where its low half starts (revision or
+         * serial), and whether the low half was silent */
+        bool high, by_rev, low_silent;
+        uint32_t low_start;
+        unsigned rechecks;      /* times this split was asked again */
 } lss_range_item;
 
 typedef struct lss_scan_state {
@@ -77,7 +83,7 @@ typedef struct lss_scan_state {
         lss_fastscan_known known;
         lss_identify_range range;
         lss_fastscan_state fs;
-        unsigned pass, i, dropped, failed_scans;
+        unsigned pass, i, dropped, failed_scans, attempt, unresolved;
         /* slowscan: stack of intervals still to query */
         lss_range_item *stack, cur;
         size_t n_stack, cap_stack;
@@ -155,6 +161,22 @@ bool step_conflict(const lss_master *m);
 #define STEP_REQUEST(m, pc, frame_expr, cs)  \
         do { lss_frame f__; frame_expr; step_lss(m, cs); step_add_tx(m, &f__); step_start(m); \
              PT_YIELD(pc); } while (0)
+
+/* A step nobody answered is started again, up to cfg.retries more times:
+ * a lost frame or a slow slave costs one timeout, not the procedure.
+ * `attempt` must be a field of the procedure's state. */
+#define STEP_RETRIED(m, pc, attempt, start_stmt) \
+        for ((attempt) = 0;; (attempt)++) { \
+                start_stmt; \
+                PT_YIELD(pc); \
+                if (step_answered(m) || (attempt) >= (m)->timing.cfg.retries) \
+                        break; \
+                (m)->stats.retries++; \
+        }
+#define REQUEST_RETRIED(m, pc, attempt, frame_expr, cs) \
+        STEP_RETRIED(m, pc, attempt, { lss_frame f__; frame_expr; step_lss(m, cs); step_add_tx(m, &f__); \
+                                       step_start(m); })
+#define SELECT_RETRIED(m, pc, attempt, id) STEP_RETRIED(m, pc, attempt, step_selective(m, id))
 
 /* master.c */
 void master_fail(lss_master *m, enum lss_status st, const char *fmt, ...) __attribute__((format(printf, 3, 4)));

@@ -10,9 +10,15 @@
  *
  * Slowscan: identify-remote-slave bisection over revision, then serial, for
  * one vendor/product; finds configured and non-configured slaves that
- * implement the identify services. A silent range is asked twice before it
- * is dropped (a missed answer would lose a slave silently). Candidates are
- * verified the same way. */
+ * implement the identify services. A silent range is asked twice (the
+ * whole range 1 + cfg.retries times) before it is dropped: a missed answer
+ * would lose a slave silently. A range that
+ * answered but neither of whose halves did lost an answer on the way: it is
+ * split and asked again (up to cfg.retries times), and reported if that
+ * never resolves. Candidates are verified the same way.
+ *
+ * Verification asks each candidate again when a step gets no answer: one
+ * late or lost frame must not cost a pass over the whole bus. */
 #include <errno.h>
 #include <stdlib.h>
 
@@ -31,7 +37,7 @@ static int cand_add(lss_scan_state *s, const lss_identity *id) {
         return 0;
 }
 
-static int stack_push(lss_scan_state *s, uint32_t rlo, uint32_t rhi, uint32_t slo, uint32_t shi) {
+static int stack_push(lss_scan_state *s, lss_range_item it) {
         if (s->n_stack == s->cap_stack) {
                 size_t cap = s->cap_stack ? s->cap_stack * 2 : 64;
                 void *d = realloc(s->stack, cap * sizeof(*s->stack));
@@ -40,13 +46,37 @@ static int stack_push(lss_scan_state *s, uint32_t rlo, uint32_t rhi, uint32_t sl
                 s->stack = d;
                 s->cap_stack = cap;
         }
-        s->stack[s->n_stack].rlo = rlo;
-        s->stack[s->n_stack].rhi = rhi;
-        s->stack[s->n_stack].slo = slo;
-        s->stack[s->n_stack].shi = shi;
-        s->stack[s->n_stack].asked_again = false;
-        s->n_stack++;
+        s->stack[s->n_stack++] = it;
         return 0;
+}
+
+/* Both halves of a range, by revision until it is one value, then by
+ * serial; the low half on top, so slaves are found in ascending order. */
+static int split(lss_scan_state *s, const lss_range_item *p, unsigned rechecks) {
+        lss_range_item lo = { .rlo = p->rlo, .rhi = p->rhi, .slo = p->slo, .shi = p->shi, .rechecks = rechecks };
+        lss_range_item hi = lo;
+        hi.high = true;
+        if (p->rlo != p->rhi) {
+                lo.rhi = p->rlo + (p->rhi - p->rlo) / 2;
+                hi.rlo = lo.rhi + 1;
+                hi.by_rev = true;
+                hi.low_start = p->rlo;
+        } else {
+                lo.shi = p->slo + (p->shi - p->slo) / 2;
+                hi.slo = lo.shi + 1;
+                hi.low_start = p->slo;
+        }
+        return stack_push(s, hi) < 0 || stack_push(s, lo) < 0 ? -ENOMEM : 0;
+}
+
+/* The range a high half was split from. */
+static lss_range_item parent_of(const lss_range_item *hi) {
+        lss_range_item p = { .rlo = hi->rlo, .rhi = hi->rhi, .slo = hi->slo, .shi = hi->shi };
+        if (hi->by_rev)
+                p.rlo = hi->low_start;
+        else
+                p.slo = hi->low_start;
+        return p;
 }
 
 /* Selective switch to each candidate, read its node-ID, back to waiting.
@@ -55,13 +85,13 @@ static int verify_candidates(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->vpc);
         s->dropped = 0;
         for (s->i = 0; s->i < s->n_cand; s->i++) {
-                step_selective(m, &s->cand[s->i].id);
-                PT_YIELD(&s->vpc);
+                SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->i].id);
                 if (!step_answered(m)) {
                         s->dropped++;
                         continue;
                 }
-                STEP_REQUEST(m, &s->vpc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
+                REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                LSS_CS_INQUIRE_NODE_ID);
                 if (step_answered(m) && !step_conflict(m)) {
                         s->cand[s->i].node_id = m->step.answer.data[1];
                         if (master_add_device(m, &s->cand[s->i].id, s->cand[s->i].node_id) < 0) {
@@ -119,31 +149,18 @@ out:;
         PT_END(&s->pc);
 }
 
-static void split(lss_scan_state *s, uint32_t rlo, uint32_t rhi, uint32_t slo, uint32_t shi) {
-        /* low half on top: found in ascending order */
-        if (rlo != rhi) {
-                uint32_t mid = rlo + (rhi - rlo) / 2;
-                stack_push(s, mid + 1, rhi, slo, shi);
-                stack_push(s, rlo, mid, slo, shi);
-        } else {
-                uint32_t mid = slo + (shi - slo) / 2;
-                stack_push(s, rlo, rhi, mid + 1, shi);
-                stack_push(s, rlo, rhi, slo, mid);
-        }
-}
-
 int proc_slowscan(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->n_cand = s->n_stack = 0;
+        s->unresolved = 0;
         m->n_devices = 0;
-        if (stack_push(s, s->range.rev_lo, s->range.rev_hi, s->range.serial_lo, s->range.serial_hi) < 0) {
-                master_fail(m, LSS_E_INCOMPLETE, "out of memory");
-                goto out;
-        }
+        if (stack_push(s, (lss_range_item) { .rlo = s->range.rev_lo, .rhi = s->range.rev_hi,
+                                             .slo = s->range.serial_lo, .shi = s->range.serial_hi,
+                                             .root = true }) < 0)
+                goto oom;
         s->i = 0;
         while (s->n_stack > 0) {
-                s->n_stack--;
-                s->cur = s->stack[s->n_stack];
+                s->cur = s->stack[--s->n_stack];
                 step_lss(m, LSS_CS_IDENTIFY_SLAVE);
                 m->step.discovery = s->i++ == 0;
                 {
@@ -160,29 +177,50 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
                 if (!step_answered(m)) {
                         /* Unlike fastscan, nothing later would notice a missed
                          * answer (a slow slave): ask a silent range once more
-                         * before giving it up. */
-                        if (!s->cur.asked_again) {
-                                s->cur.asked_again = true;
+                         * before giving it up, the whole range as often as
+                         * any other step (it costs only an empty bus time). */
+                        if (++s->cur.asks < (s->cur.root ? m->timing.cfg.retries + 1 : 2)) {
                                 s->stack[s->n_stack++] = s->cur;
                                 m->stats.retries++;
+                        } else if (!s->cur.high) {
+                                /* a low half: its high half, right below, must answer now */
+                                if (s->n_stack > 0)
+                                        s->stack[s->n_stack - 1].low_silent = true;
+                        } else if (s->cur.low_silent) {
+                                lss_range_item p = parent_of(&s->cur);
+                                if (s->cur.rechecks >= m->timing.cfg.retries)
+                                        s->unresolved++;
+                                else if (split(s, &p, s->cur.rechecks + 1) < 0)
+                                        goto oom;
+                                else
+                                        m->stats.retries++;
                         }
                         continue;
                 }
                 if (s->cur.rlo == s->cur.rhi && s->cur.slo == s->cur.shi) {
                         lss_identity id = { s->range.vendor, s->range.product, s->cur.rlo, s->cur.slo };
-                        if (cand_add(s, &id) < 0) {
-                                master_fail(m, LSS_E_INCOMPLETE, "out of memory");
-                                goto out;
-                        }
+                        if (cand_add(s, &id) < 0)
+                                goto oom;
                         continue;
                 }
-                split(s, s->cur.rlo, s->cur.rhi, s->cur.slo, s->cur.shi);
+                if (split(s, &s->cur, 0) < 0)
+                        goto oom;
         }
         s->vpc = 0;
         PT_CALL(&s->pc, verify_candidates(m, s));
-        if (m->result.status == LSS_OK && s->dropped > 0)
+        if (m->result.status != LSS_OK)
+                goto out;
+        if (s->unresolved > 0)
+                master_fail(m, LSS_E_INCOMPLETE,
+                            "%u ranges answered identify but neither of their halves did (a slave left, or its "
+                            "answers were lost)%s", s->unresolved,
+                            s->dropped > 0 ? "; some slaves answered identify but not the selective switch" : "");
+        else if (s->dropped > 0)
                 master_fail(m, LSS_E_INCOMPLETE, "%u slaves answered identify but not the selective switch",
                             s->dropped);
+        goto out;
+oom:
+        master_fail(m, LSS_E_INCOMPLETE, "out of memory");
 out:;
         PT_END(&s->pc);
 }

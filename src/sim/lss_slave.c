@@ -437,8 +437,9 @@ void lss_slave_on_frame(lss_slave *s, const lss_frame *f, uint64_t now_us) {
 
         s->now_us = now_us;
         process_time(s);
+        bool lost = s->faults.rx_loss_ppm > 0 && next_random(&s->rng) % 1000000 < s->faults.rx_loss_ppm;
         /* inside the activation window the controller is being retuned */
-        if (!in_window(s, now_us)) {
+        if (!lost && !in_window(s, now_us)) {
                 if (lss_is_request(f))
                         lss_request(s, f);
                 else if (nmt_decode(f, &cs, &node))

@@ -40,6 +40,8 @@ typedef struct lss_slave_faults {
         bool configure_error_specific; /* configure node-ID -> 255/spec 0x42 */
         uint32_t late_found_us;   /* the first answer to the fastscan request that
                                    * completes its identity comes this much later */
+        uint32_t rx_loss_ppm;     /* each received frame is lost with this probability
+                                   * (per million): a receive FIFO overrun */
 } lss_slave_faults;
 
 void lss_slave_faults_default(lss_slave_faults *f);
