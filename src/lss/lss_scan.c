@@ -12,10 +12,10 @@
  * one vendor/product; finds configured and non-configured slaves that
  * implement the identify services. A silent range is asked twice (the
  * whole range 1 + cfg.retries times) before it is dropped: a missed answer
- * would lose a slave silently. A range that
- * answered but neither of whose halves did lost an answer on the way: it is
- * split and asked again (up to cfg.retries times), and reported if that
- * never resolves. Candidates are verified the same way.
+ * would lose a slave silently. A range that answered but neither of whose
+ * halves did lost an answer on the way: it is split and asked again (up to
+ * cfg.retries times), and reported if that never resolves. Candidates are
+ * verified the same way.
  *
  * Verification asks each candidate again when a step gets no answer: one
  * late or lost frame must not cost a pass over the whole bus. */
