@@ -169,6 +169,29 @@ START_TEST(slowscan_slave_left) {
 }
 END_TEST
 
+/* Nothing above the whole range would notice its lost answer: a slave that
+ * misses the first three queries (18 frames) is still found. */
+static void deaf_for_three_queries(void *ud, membus *bus, lss_master *m) {
+        (void) m;
+        (void) ud;
+        membus_slave(bus, 0)->faults.silent = membus_get_stats(bus)->lss_requests < 18;
+}
+
+START_TEST(slowscan_root_asked_again) {
+        membus *b = bus_random(1, 261, 0xEC, 0x1234, NULL);
+        membus_slave(b, 0)->faults.silent = true;
+        lss_master *m = master_default();
+        lss_identify_range r = full_range(0xEC, 0x1234);
+        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
+        const lss_result *res = lss_drive(m, b, 600 * SECOND, deaf_for_three_queries, NULL);
+        ck_assert_msg(res->status == LSS_OK, "%s", res->message);
+        ck_assert_uint_eq(res->n_devices, 1);
+        assert_devices_real(b, res);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* Cancel in the middle: everything back to waiting. */
 static void cancel_after(void *ud, membus *bus, lss_master *m) {
         unsigned *n = ud;
@@ -220,6 +243,7 @@ int main(void) {
         tcase_add_test(tc, slowscan_unverifiable);
         tcase_add_test(tc, scans_keep_lossy_slaves);
         tcase_add_test(tc, slowscan_slave_left);
+        tcase_add_test(tc, slowscan_root_asked_again);
         tcase_add_test(tc, cancel_midway);
         tcase_add_test(tc, progress_reported);
         suite_add_tcase(s, tc);
