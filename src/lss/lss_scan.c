@@ -210,12 +210,17 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
         PT_CALL(&s->pc, verify_candidates(m, s));
         if (m->result.status != LSS_OK)
                 goto out;
-        if (s->unresolved > 0)
-                master_fail(m, LSS_E_INCOMPLETE,
-                            "%u ranges answered identify but neither of their halves did (a slave left, or its "
-                            "answers were lost)%s", s->unresolved,
-                            s->dropped > 0 ? "; some slaves answered identify but not the selective switch" : "");
-        else if (s->dropped > 0)
+        if (s->unresolved > 0) {
+                if (s->dropped > 0)
+                        master_fail(m, LSS_E_INCOMPLETE,
+                                    "%u ranges answered identify but neither of their halves did (a slave left, or "
+                                    "its answers were lost); %u slaves answered identify but not the selective switch",
+                                    s->unresolved, s->dropped);
+                else
+                        master_fail(m, LSS_E_INCOMPLETE,
+                                    "%u ranges answered identify but neither of their halves did (a slave left, or "
+                                    "its answers were lost)", s->unresolved);
+        } else if (s->dropped > 0)
                 master_fail(m, LSS_E_INCOMPLETE, "%u slaves answered identify but not the selective switch",
                             s->dropped);
         goto out;

@@ -8,6 +8,14 @@ static lss_identify_range full_range(uint32_t vendor, uint32_t product) {
         return (lss_identify_range) { vendor, product, 0, UINT32_MAX, 0, UINT32_MAX };
 }
 
+/* Starts a slowscan of vendor 0xEC, product 0x1234 and runs it to its end,
+ * calling hook (may be NULL) at every step. */
+static const lss_result *slowscan_driven(lss_master *m, membus *b, lss_drive_hook hook, void *ud) {
+        lss_identify_range r = full_range(0xEC, 0x1234);
+        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
+        return lss_drive(m, b, 600 * SECOND, hook, ud);
+}
+
 static void slowscan_n(size_t n, uint64_t seed) {
         lss_slave_faults f = faults_latency(1000, 300);
         membus *b = bus_random(n, seed, 0xEC, 0x1234, &f);
@@ -20,9 +28,7 @@ static void slowscan_n(size_t n, uint64_t seed) {
         lss_identity other = { 0xEC, 0x9999, 1, 1 };
         membus_add_slave(b, &other, 3, &f);
         lss_master *m = master_default();
-        lss_identify_range r = full_range(0xEC, 0x1234);
-        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
-        const lss_result *res = run(m, b);
+        const lss_result *res = slowscan_driven(m, b, NULL, NULL);
         ck_assert_msg(res->status == LSS_OK, "%s", res->message);
         ck_assert_uint_eq(res->n_devices, n);
         assert_devices_real(b, res);
@@ -97,9 +103,7 @@ START_TEST(slowscan_unverifiable) {
         membus *b = bus_random(3, 221, 0xEC, 0x1234, NULL);
         membus_slave(b, 1)->faults.ignore_cs = LSS_CS_SWITCH_SEL_SERIAL;
         lss_master *m = master_default();
-        lss_identify_range r = full_range(0xEC, 0x1234);
-        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
-        const lss_result *res = run(m, b);
+        const lss_result *res = slowscan_driven(m, b, NULL, NULL);
         ck_assert_int_eq(res->status, LSS_E_INCOMPLETE);
         ck_assert_uint_eq(res->n_devices, 2);
         assert_devices_real(b, res);
@@ -117,13 +121,11 @@ static const lss_result *scan_lossy(bool slow, size_t n, uint64_t seed, membus *
         f.rx_loss_ppm = 30000;
         membus *b = bus_random(n, seed, 0xEC, 0x1234, &f);
         lss_master *m = master_default();
-        lss_identify_range r = full_range(0xEC, 0x1234);
-        if (slow)
-                ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
-        else
-                ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
         *bus = b;
         *master = m;
+        if (slow)
+                return slowscan_driven(m, b, NULL, NULL);
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
         return run(m, b);
 }
 
@@ -158,14 +160,38 @@ static void leave_after_first_answer(void *ud, membus *bus, lss_master *m) {
 START_TEST(slowscan_slave_left) {
         membus *b = bus_random(1, 251, 0xEC, 0x1234, NULL);
         lss_master *m = master_default();
-        lss_identify_range r = full_range(0xEC, 0x1234);
-        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
-        const lss_result *res = lss_drive(m, b, 600 * SECOND, leave_after_first_answer, NULL);
+        const lss_result *res = slowscan_driven(m, b, leave_after_first_answer, NULL);
         ck_assert_int_eq(res->status, LSS_E_INCOMPLETE);
         ck_assert_msg(strstr(res->message, "neither of their halves") != NULL, "%s", res->message);
         ck_assert_uint_eq(res->n_devices, 0);
         lss_master_free(m);
         membus_free(b);
+}
+END_TEST
+
+/* Both faults in one slowscan: the message counts each. Slave 1 never
+ * answers the selective switch; slave 0 leaves after the K-th answer on the
+ * bus, for every K until one leaves a range whose halves are both silent. */
+static void leave_after_k_answers(void *ud, membus *bus, lss_master *m) {
+        (void) m;
+        if (membus_get_stats(bus)->lss_responses >= *(const unsigned *) ud)
+                membus_slave(bus, 0)->faults.silent = true;
+}
+
+START_TEST(slowscan_left_and_unverifiable) {
+        bool both = false;
+        for (unsigned k = 1; k <= 200 && !both; k++) {
+                membus *b = bus_random(2, 255, 0xEC, 0x1234, NULL);
+                membus_slave(b, 1)->faults.ignore_cs = LSS_CS_SWITCH_SEL_SERIAL;
+                lss_master *m = master_default();
+                const lss_result *res = slowscan_driven(m, b, leave_after_k_answers, &k);
+                ck_assert_int_eq(res->status, LSS_E_INCOMPLETE);
+                both = strstr(res->message, "1 ranges answered identify but neither of their halves did") &&
+                       strstr(res->message, "; 1 slaves answered identify but not the selective switch");
+                lss_master_free(m);
+                membus_free(b);
+        }
+        ck_assert_msg(both, "no leave point gave both counts");
 }
 END_TEST
 
@@ -181,9 +207,7 @@ START_TEST(slowscan_root_asked_again) {
         membus *b = bus_random(1, 261, 0xEC, 0x1234, NULL);
         membus_slave(b, 0)->faults.silent = true;
         lss_master *m = master_default();
-        lss_identify_range r = full_range(0xEC, 0x1234);
-        ck_assert_int_eq(lss_master_slowscan(m, &r, membus_now(b)), 0);
-        const lss_result *res = lss_drive(m, b, 600 * SECOND, deaf_for_three_queries, NULL);
+        const lss_result *res = slowscan_driven(m, b, deaf_for_three_queries, NULL);
         ck_assert_msg(res->status == LSS_OK, "%s", res->message);
         ck_assert_uint_eq(res->n_devices, 1);
         assert_devices_real(b, res);
@@ -243,6 +267,7 @@ int main(void) {
         tcase_add_test(tc, slowscan_unverifiable);
         tcase_add_test(tc, scans_keep_lossy_slaves);
         tcase_add_test(tc, slowscan_slave_left);
+        tcase_add_test(tc, slowscan_left_and_unverifiable);
         tcase_add_test(tc, slowscan_root_asked_again);
         tcase_add_test(tc, cancel_midway);
         tcase_add_test(tc, progress_reported);
