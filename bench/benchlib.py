@@ -159,7 +159,10 @@ def save(name, data):
 
 
 def source_version():
-    """The commit the binaries were built from (+ 'dirty' for a changed tree)."""
+    """The commit the binaries were built from (+ 'dirty' for a changed tree):
+    bench/run's, taken when it built them, else the tree's now."""
+    if os.environ.get('LSSD_BENCH_SOURCE'):
+        return os.environ['LSSD_BENCH_SOURCE']
     try:
         head = subprocess.run(['git', '-C', SOURCE_ROOT, 'rev-parse', '--short', 'HEAD'], capture_output=True,
                               text=True, timeout=10).stdout.strip()
