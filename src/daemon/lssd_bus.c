@@ -15,6 +15,7 @@
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_path.h"
 #include "daemon/lssd_vtables.h"
+#include "lss/lss_proto.h"
 
 /* Frames read per wake-up before the other buses get their turn. */
 #define RX_BATCH 64u
@@ -358,6 +359,12 @@ static void bus_on_echo(lssd_bus *b, const lss_frame *f, uint64_t rx) {
         lss_master_on_tx_confirmed(b->engine, rx);
 }
 
+static void bus_note_bootup(lssd_bus *b, const lss_frame *f, uint64_t rx) {
+        uint8_t node, state;
+        if (rx <= b->unstored_until && bootup_decode(f, &node, &state) && state == 0)
+                b->unstored[node] = true;
+}
+
 static void bus_poll_rx(lssd_bus *b) {
         lss_frame f;
         uint64_t rx;
@@ -369,8 +376,10 @@ static void bus_poll_rx(lssd_bus *b) {
                         break;
                 if (f.flags & LSS_FRAME_ECHO)
                         bus_on_echo(b, &f, rx);
-                else
+                else {
+                        bus_note_bootup(b, &f, rx);
                         lss_master_on_frame(b->engine, &f, rx);
+                }
         }
         if (r < 0 && r != -EAGAIN && r != -EINTR && r != -ENETDOWN && r != -ENODEV)
                 log_debug("%s: receive failed: %s", b->ifname, strerror(-r));

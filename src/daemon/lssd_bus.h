@@ -73,8 +73,17 @@ struct lssd_bus {
         sd_event_source *remove_source;  /* frees the bus outside of its own callbacks */
 
         bool boot_pending;               /* auto_assign: the boot pass has not ended yet */
+        /* node-IDs that booted up right after a Reset: a slave that an
+         * interrupted pass configured but may not have stored took its pending
+         * ID then; the next AutoAssign stores it (lss_autoassign_plan) */
+        bool unstored[128];
+        uint64_t unstored_until;         /* end of that window after the last Reset */
         char *boot_status;               /* how the boot pass ended, for STATUS= */
 };
+
+/* How long after a Reset a boot-up counts as a pending ID taken (the
+ * engine's default wait for a boot-up after an assignment). */
+#define LSSD_UNSTORED_WINDOW_US 1000000u
 
 /* Opens the transport (a missing interface is fine), registers the object
  * and queues the first frame: switch-global waiting. */

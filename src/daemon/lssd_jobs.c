@@ -58,6 +58,8 @@ static int job_start_failed(lssd_bus *b, lssd_job *j, int r) {
 static int run_reset(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (!r) {
                 int k = lss_master_switch_global(b->engine, LSS_MODE_WAITING, lssd_bus_now(b));
+                if (k >= 0)
+                        b->unstored_until = lssd_bus_now(b) + LSSD_UNSTORED_WINDOW_US;
                 return k < 0 ? job_start_failed(b, j, k) : 1;
         }
         j->result = lssd_status_to_result(r->status);
@@ -498,9 +500,12 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         uint64_t now_realtime = lssd_realtime_us();
 
         if (!r) {
+                j->plan.unstored = b->unstored;
                 int k = lss_master_autoassign(b->engine, &j->plan, lssd_bus_now(b));
                 return k < 0 ? job_start_failed(b, j, k) : 1;
         }
+        if (r->status == LSS_OK)
+                memset(b->unstored, 0, sizeof(b->unstored));
 
         out = lss_master_outcomes(b->engine, &n);
         for (size_t i = 0; i < n; i++) {

@@ -105,7 +105,15 @@ int lssd_simbus_add_slave(lssd_simbus *s, const lss_identity *id, uint8_t node_i
         size_t i = membus_add_slave(s->bus, id, node_id, &faults);
         if (i == SIZE_MAX)
                 return -ENOMEM;
-        lss_slave_power_on(membus_slave(s->bus, i), membus_now(s->bus));
+        /* The slaves were running before lssd started, as on a machine whose
+         * devices boot faster than it: their power-on boot-up is not on the
+         * bus lssd sees (one would look like a pending ID taken at lssd's
+         * switch to waiting, see lssd_bus.h). */
+        lss_slave *sl = membus_slave(s->bus, i);
+        lss_slave_emit_fn emit = sl->emit;
+        sl->emit = NULL;
+        lss_slave_power_on(sl, membus_now(s->bus));
+        sl->emit = emit;
         return 0;
 }
 

@@ -25,7 +25,13 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
         s->old = m->step.answer.data[1];
         m->result.node_id = s->old;
         if (s->old == s->node_id) {
-                /* already right: nothing to configure, nothing to store */
+                /* Already right: nothing to configure, nothing to store —
+                 * unless the node-ID came from an interrupted pass: configured,
+                 * maybe not stored, taken when the slave went back to waiting. */
+                if ((s->flags & LSS_ASSIGN_STORE) && s->unstored && s->unstored[s->node_id]) {
+                        m->result.changed = true;
+                        goto store;
+                }
                 SEND(m, &s->tail_pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
                 goto out;
         }
@@ -64,6 +70,7 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
         }
         m->result.changed = true;
 
+store:
         if (s->flags & LSS_ASSIGN_STORE) {
                 REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
                 if (!step_answered(m)) {

@@ -185,6 +185,7 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                         m->as.node_id = s->target;
                         m->as.flags = assign_flags(s);
                         m->as.taken = s->plan->nmt_stop ? s->taken : NULL;
+                        m->as.unstored = s->plan->unstored;
                         PT_CALL(&s->i_pc, proc_assign(m, &m->as));
                         /* a pool ID somebody already answers to: take the next one */
                         if (s->entry < 0 && m->result.in_use) {
@@ -242,6 +243,7 @@ int proc_autoassign(lss_master *m) {
                 m->as.node_id = s->target;
                 m->as.flags = assign_flags(s);
                 m->as.taken = s->plan->nmt_stop ? s->taken : NULL;
+                m->as.unstored = s->plan->unstored;
                 PT_CALL(&s->pc, proc_assign(m, &m->as));
                 if (m->result.status != LSS_E_NOT_FOUND) {
                         s->handled[s->i] = true;

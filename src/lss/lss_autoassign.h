@@ -39,6 +39,11 @@ typedef struct lss_autoassign_plan {
         uint8_t pool_lo, pool_hi; /* for LSS_UNKNOWN_POOL */
         bool store;
         bool nmt_stop;
+        /* 128 entries or NULL, may change while the pass runs: node-IDs a
+         * device took from a pending ID that an interrupted pass configured
+         * and may not have stored; a device found with its mapped node-ID
+         * among them is stored again (with store on) instead of "unchanged". */
+        const bool *unstored;
 } lss_autoassign_plan;
 
 enum lss_outcome_kind {

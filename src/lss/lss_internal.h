@@ -64,6 +64,7 @@ typedef struct lss_assign_state {
         unsigned flags, attempt, field;
         bool selected;
         const bool *taken;      /* node-IDs known to be taken (128 entries), or NULL */
+        const bool *unstored;   /* node-IDs that may not be stored (128 entries), or NULL */
         lss_fastscan_state fs;
 } lss_assign_state;
 

@@ -10,6 +10,8 @@ witnesses of what happened on the bus."""
 import os
 import random
 import signal
+import socket
+import struct
 import subprocess
 import sys
 import time
@@ -265,6 +267,44 @@ def test_crash_restart():
         env.alive()
 
 
+# ---- a pass interrupted between Configure and Store, made on purpose ----
+
+def send_lss(ifname, requests):
+    """Writes LSS requests (0x7E5, DLC 8) the way a master would, 50 ms apart."""
+    with socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW) as s:
+        s.bind((ifname,))
+        for data in requests:
+            s.send(struct.pack('=IB3x8s', 0x7E5, 8, bytes(data).ljust(8, b'\0')))
+            time.sleep(0.05)
+
+
+def test_interrupted_store():
+    rnd = random.Random(6)
+    slaves = [Slave(V, P, R, rnd.getrandbits(32)) for _ in range(2)]
+    mapping = [(s.serial, 40 + i, R) for i, s in enumerate(slaves)]
+    cfg = config('vcan0', mapping, vendor=hex(V), product=hex(P), auto_assign=True)
+    env = Env({'vcan0': slaves}, config=cfg, candump=True, notify=True, start_lssd=False)
+    if not env.real:
+        raise Skip('needs a bus without lssd')
+    with env:
+        # what a master killed after Configure Node-ID leaves: slave 0 in
+        # configuration with pending node-ID 40, nothing stored
+        s0 = slaves[0]
+        send_lss('vcan0', [[0x40 + i] + list(struct.pack('<I', v))
+                           for i, v in enumerate((s0.vendor, s0.product, s0.revision, s0.serial))] + [[0x11, 40]])
+        env.wait_until(lambda: int(env.slave_state('vcan0', s0.serial).get('pending_node_id', -1)) == 40, timeout=30,
+                       what='pending node-ID 40 at slave 0')
+        expect_eq(slave_ids(env, 'vcan0', slaves)[s0.serial], (255, 255), 'slave 0 before lssd starts')
+        env._start_lssd()
+        env.notify_wait(lambda m: m.get('READY') == '1', timeout=600, what='READY=1')
+        # lssd's switch to waiting gave slave 0 its pending ID; the pass must store it
+        expect_eq(slave_ids(env, 'vcan0', slaves), {m[0]: (m[1], m[1]) for m in mapping},
+                  'slaves after the pass')
+        expect(all_waiting(env, 'vcan0', slaves), 'slaves left in configuration')
+        expect('node-ID 40 -> 40' in env.lssd_output(), 'the pass names the store of node-ID 40')
+        env.alive()
+
+
 # ---- bad configuration files ----
 
 def bad_files(rnd):
@@ -344,6 +384,7 @@ TESTS = {
     'mixed': test_mixed,
     'notify-missing-interface': test_notify_missing_interface,
     'crash-restart': test_crash_restart,
+    'interrupted-store': test_interrupted_store,
     'bad-config': test_bad_config,
 }
 
