@@ -77,13 +77,10 @@ struct lssd_bus {
          * interrupted pass configured but may not have stored took its pending
          * ID then; the next AutoAssign stores it (lss_autoassign_plan) */
         bool unstored[128];
-        uint64_t unstored_until;         /* end of that window after the last Reset */
+        uint64_t unstored_until;         /* end of that window after the last Reset (the
+                                          * engine's wait for a boot-up after an assignment) */
         char *boot_status;               /* how the boot pass ended, for STATUS= */
 };
-
-/* How long after a Reset a boot-up counts as a pending ID taken (the
- * engine's default wait for a boot-up after an assignment). */
-#define LSSD_UNSTORED_WINDOW_US 1000000u
 
 /* Opens the transport (a missing interface is fine), registers the object
  * and queues the first frame: switch-global waiting. */

@@ -58,8 +58,11 @@ static int job_start_failed(lssd_bus *b, lssd_job *j, int r) {
 static int run_reset(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (!r) {
                 int k = lss_master_switch_global(b->engine, LSS_MODE_WAITING, lssd_bus_now(b));
-                if (k >= 0)
-                        b->unstored_until = lssd_bus_now(b) + LSSD_UNSTORED_WINDOW_US;
+                if (k >= 0) {
+                        lss_timing_config tc;
+                        lss_timing_config_default(&tc);
+                        b->unstored_until = lssd_bus_now(b) + tc.bootup_timeout_us;
+                }
                 return k < 0 ? job_start_failed(b, j, k) : 1;
         }
         j->result = lssd_status_to_result(r->status);
