@@ -20,6 +20,7 @@ typedef struct sim_profile {
         /* deviations from a plain CiA 305 slave */
         bool needs_nmt_stopped;
         bool no_identify;
+        bool canopennode_lss;
         bool bit_timing_silent;
         uint32_t bit_index_unsupported;
 } sim_profile;

@@ -219,9 +219,20 @@ static void fastscan(lss_slave *s, const lss_frame *f) {
         uint32_t idnumber = lss_get_u32(f->data + 1);
         uint8_t bitcheck = f->data[5], sub = f->data[6], next = f->data[7];
 
-        if (s->st.configuration)
+        if (s->faults.fastscan_any) {
+                answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
+                if (bitcheck == 0 && next < sub)
+                        enter_configuration(s);
                 return;
+        }
+        if (s->st.configuration) {
+                if (s->faults.canopennode_lss)
+                        answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
+                return;
+        }
         if (s->st.active_node_id != LSS_NODE_ID_UNCONFIGURED && !s->faults.fastscan_when_configured)
+                return;
+        if (s->faults.canopennode_lss && s->st.pending_node_id != LSS_NODE_ID_UNCONFIGURED)
                 return;
         if ((bitcheck > FASTSCAN_MAX_BIT && bitcheck != LSS_FASTSCAN_PING) ||
             sub >= LSS_FIELD_COUNT || next >= LSS_FIELD_COUNT)
@@ -348,6 +359,8 @@ static void lss_request(lss_slave *s, const lss_frame *f) {
                 /* selection is a waiting-state service */
                 if (!s->st.configuration)
                         switch_selective(s, cs - LSS_CS_SWITCH_SEL_VENDOR, lss_get_u32(f->data + 1));
+                else if (s->faults.canopennode_lss && cs == LSS_CS_SWITCH_SEL_SERIAL)
+                        answer_cs(s, LSS_CS_SWITCH_SEL_RESPONSE, 0, 0);
                 break;
         case LSS_CS_IDENTIFY_VENDOR:
         case LSS_CS_IDENTIFY_PRODUCT:

@@ -28,6 +28,15 @@ typedef struct lss_slave_faults {
         int ignore_cs;            /* -1: none; else this request cs is ignored entirely */
         bool wrong_dlc;           /* answers with DLC 7 */
         bool fastscan_when_configured; /* takes part in fastscan with a node-ID */
+        /* CANopenNode v4 (305/CO_LSSslave.c): in waiting, fastscan only while
+         * pending and active node-ID are both 255; in configuration every
+         * request goes to its process step, which answers any Fastscan with
+         * 0x4F and any Switch Selective serial with 0x44, matching or not */
+        bool canopennode_lss;
+        /* worst case: answers every Fastscan request in every state, whatever
+         * its node-ID or identity; a confirmation that goes back to the
+         * vendor field (bitcheck 0, lssnext < lsssub) puts it in configuration */
+        bool fastscan_any;
         bool store_unsupported;   /* store -> error 1 */
         bool store_fails;         /* store -> error 2 (media access) */
         enum lss_slave_early_config early_config;

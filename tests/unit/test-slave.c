@@ -696,6 +696,54 @@ START_TEST(no_identify) {
 }
 END_TEST
 
+/* CANopenNode v4: Fastscan in waiting only while pending and active are
+ * both 255; in configuration every Fastscan request and every selective
+ * serial number is answered, matching or not. */
+START_TEST(canopennode_lss) {
+        lss_slave_faults fl;
+        lss_slave_faults_default(&fl);
+        fl.canopennode_lss = true;
+        fl.no_identify = true;
+        rig r;
+        rig_init(&r, 0xFF, &fl);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        ck_assert_uint_eq(fastscan(&r, ~ID.vendor, 0, 0, 1), 1); /* no match, answered anyway */
+        lss_frame f;
+        lss_encode_switch_selective(&f, LSS_FIELD_SERIAL, ID.serial + 1);
+        ck_assert_uint_eq(ask(&r, &f), 1);
+        expect_answer(&r, LSS_CS_SWITCH_SEL_RESPONSE, 0, 0);
+        /* a pending node-ID: out of Fastscan in waiting, still answering in configuration */
+        ck_assert_uint_eq(configure_node_id(&r, 0x30), 1);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        global(&r, LSS_MODE_WAITING); /* takes the pending node-ID: boot-up */
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x30);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 0);
+        /* Configure Node-ID 255 is accepted; pending 255, active 0x30: still out */
+        ck_assert_uint_eq(select_all(&r, &ID), 1);
+        ck_assert_uint_eq(configure_node_id(&r, 0xFF), 1);
+        expect_answer(&r, LSS_CS_CONFIGURE_NODE_ID, 0, 0);
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 0);
+}
+END_TEST
+
+/* The worst case: every Fastscan request answered, in every state. */
+START_TEST(fastscan_any) {
+        lss_slave_faults fl;
+        lss_slave_faults_default(&fl);
+        fl.fastscan_any = true;
+        rig r;
+        rig_init(&r, 0x05, &fl);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        ck_assert_uint_eq(fastscan(&r, ~ID.vendor, 0, 0, 1), 1);
+        ck_assert(!r.s.st.configuration);
+        ck_assert_uint_eq(fastscan(&r, 0, 0, 3, 0), 1); /* back to the vendor: "found" */
+        ck_assert(r.s.st.configuration);
+        ck_assert_uint_eq(fastscan(&r, 0, 7, 1, 1), 1);
+}
+END_TEST
+
 /* The master side of fastscan, against the rig's one slave. */
 static void scan(rig *r, lss_identity *found) {
         ck_assert_uint_eq(fastscan(r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
@@ -1104,6 +1152,8 @@ int main(void) {
         tcase_add_test(tc, identify_remote_ranges);
         tcase_add_test(tc, identify_non_configured);
         tcase_add_test(tc, no_identify);
+        tcase_add_test(tc, canopennode_lss);
+        tcase_add_test(tc, fastscan_any);
         tcase_add_test(tc, fastscan_full);
         tcase_add_test(tc, fastscan_bitcheck);
         tcase_add_test(tc, fastscan_ping_resets);
