@@ -245,9 +245,14 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         } else
                 log_error("%s: failed to record device %s: %s", b->ifname, ident, strerror(-k));
 
+        char stored[80] = "";
+        if (r->not_stored)
+                snprintf(stored, sizeof(stored), ", not stored (device cannot store: %s)",
+                         lss_store_error_name(r->err));
+        else if (r->changed && j->assign.store)
+                snprintf(stored, sizeof(stored), ", stored");
         lssd_log_device(LOG_NOTICE, b->ifname, &j->identity, j->node_id, "%s: device %s: node-ID %u -> %u%s%s",
-                        b->ifname, ident, r->node_id, j->node_id, r->changed ? "" : " (already set)",
-                        r->changed && j->assign.store ? ", stored" : "");
+                        b->ifname, ident, r->node_id, j->node_id, r->changed ? "" : " (already set)", stored);
         j->result = "done";
         reply_empty(j);
         return 0;
@@ -353,9 +358,15 @@ static void scan_log(lssd_bus *b, lssd_job *j) {
         log_info("%s", line);
         for (size_t i = 0; i < j->n_found; i++) {
                 char ident[40];
-                lssd_log_device(LOG_DEBUG, b->ifname, &j->found[i].id, j->found[i].node_id, "%s: found %s node %u",
-                                b->ifname, lssd_identity_format(&j->found[i].id, ident, sizeof(ident)),
-                                j->found[i].node_id);
+                const lss_device *d = &j->found[i];
+                lssd_identity_format(&d->id, ident, sizeof(ident));
+                lssd_log_device(LOG_DEBUG, b->ifname, &d->id, d->node_id, "%s: found %s node %u", b->ifname, ident,
+                                d->node_id);
+                if (d->aside_node_id)
+                        lssd_log_device(LOG_INFO, b->ifname, &d->id, d->node_id,
+                                        "%s: Scan set %s aside with the volatile node-ID %u while it went on, then "
+                                        "gave it 255 back (NMT Reset Communication of node %u); node-ID now %u",
+                                        b->ifname, ident, d->aside_node_id, d->aside_node_id, d->node_id);
         }
 }
 
@@ -486,7 +497,10 @@ static void autoassign_log_one(lssd_bus *b, const lss_outcome *o) {
         default:
                 break;
         }
-        if (o->message[0])
+        if (o->not_stored)
+                snprintf(detail, sizeof(detail), ", not stored (device cannot store: %s)",
+                         lss_store_error_name(o->err));
+        else if (o->message[0])
                 snprintf(detail, sizeof(detail), ": %s", o->message);
         lssd_log_device(priority, b->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s",
                         b->ifname, ident, lss_outcome_name(o->kind), o->old_node_id, o->new_node_id, detail);

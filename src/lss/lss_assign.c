@@ -79,9 +79,13 @@ store:
                 }
                 m->result.err = m->step.answer.data[1];
                 m->result.spec = m->step.answer.data[2];
-                if (m->result.err != 0) {
-                        master_fail(m, LSS_E_REJECTED, "Store Configuration rejected by the slave: error %u, spec %u",
-                                    m->result.err, m->result.spec);
+                if (m->result.err == LSS_ERR_STORE_NOT_SUPPORTED || m->result.err == LSS_ERR_STORE_MEDIA) {
+                        /* a device that cannot store still takes the node-ID
+                         * until its next power cycle: go on, say so */
+                        m->result.not_stored = true;
+                } else if (m->result.err != 0) {
+                        master_fail(m, LSS_E_REJECTED, "Store Configuration rejected by the slave: %s (error %u, "
+                                    "spec %u)", lss_store_error_name(m->result.err), m->result.err, m->result.spec);
                         goto out;
                 }
         }
@@ -116,7 +120,7 @@ static void identity_of_scan(lss_assign_state *s) {
 
 /* Each assignment reports only on itself (a pass runs many). */
 static void result_reset(lss_master *m) {
-        m->result.changed = m->result.in_use = false;
+        m->result.changed = m->result.in_use = m->result.not_stored = false;
         m->result.err = m->result.spec = 0;
         m->result.node_id = LSS_NODE_ID_UNCONFIGURED;
 }

@@ -27,6 +27,9 @@ typedef struct lss_aa_state {
         size_t n_out, cap_out;
         size_t given_before;    /* node-IDs given before the current blind enumeration */
         unsigned blind_passes;
+        bool avoid[128];        /* node-IDs an enumeration may not set a slave aside with */
+        enum lss_status failed; /* an enumeration met a slave that does not follow CiA 305 */
+        char failed_msg[160];
 } lss_aa_state;
 
 const char *lss_outcome_name(enum lss_outcome_kind k) {
@@ -127,6 +130,8 @@ static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool 
         if (r->status == LSS_OK) {
                 o->kind = !r->changed ? LSS_OUTCOME_UNCHANGED : pool ? LSS_OUTCOME_POOL : LSS_OUTCOME_ASSIGNED;
                 o->new_node_id = s->target;
+                o->not_stored = r->not_stored;
+                o->err = r->err;
                 s->used[s->target] = true;
         } else if (r->status == LSS_E_NOT_FOUND) {
                 o->kind = LSS_OUTCOME_MISSING;
@@ -143,6 +148,20 @@ static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool 
         m->result.status = LSS_OK;
         m->result.message[0] = 0;
         m->result.in_use = false;
+}
+
+/* The misbehaving slave is the pass's error and a failed outcome of its own. */
+static void enumeration_failed(lss_aa_state *s, lss_master *m) {
+        s->failed = m->result.status;
+        snprintf(s->failed_msg, sizeof(s->failed_msg), "%s", m->result.message);
+        lss_outcome *o = outcome_add(s, &m->result.id);
+        if (o) {
+                o->kind = LSS_OUTCOME_FAILED;
+                o->status = m->result.status;
+                o->old_node_id = o->new_node_id = 0;
+                snprintf(o->message, sizeof(o->message), "%s", m->result.message);
+        }
+        m->result.status = LSS_OK;
 }
 
 static unsigned assign_flags(const lss_aa_state *s) {
@@ -289,8 +308,19 @@ int proc_autoassign(lss_master *m) {
                         m->sc.known.known_bits[LSS_FIELD_VENDOR] = 32;
                         m->sc.known.known_bits[LSS_FIELD_PRODUCT] = 32;
                 }
+                for (unsigned id = 0; id < 128; id++)
+                        s->avoid[id] = s->used[id] || s->taken[id];
+                m->sc.avoid = s->avoid;
+                m->sc.keep_stopped = s->plan->nmt_stop;
                 m->sc.pc = m->sc.vpc = 0;
                 PT_CALL(&s->pc, proc_enumerate(m, &m->sc));
+                if (m->cancelling)
+                        goto out;
+                if (m->sc.misbehaving) {
+                        /* nothing more can be found by fastscan: report it, assign nothing of this scan */
+                        enumeration_failed(s, m);
+                        break;
+                }
                 m->result.status = LSS_OK;
                 if (todo_take(s, m->devices, m->n_devices) < 0)
                         continue;
@@ -318,6 +348,9 @@ int proc_autoassign(lss_master *m) {
                 }
         STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
         m->result.status = LSS_OK;
+        if (s->failed != LSS_OK)
+                master_fail(m, s->failed, "%s", s->failed_msg);
+out:
         m->n_devices = 0; /* the outcomes are the result */
         PT_END(&s->pc);
 }

@@ -63,6 +63,8 @@ typedef struct lss_outcome {
         uint8_t old_node_id; /* 0xFF non-configured, 0 unknown (missing) */
         uint8_t new_node_id; /* what it has now (0 if missing) */
         enum lss_outcome_kind kind;
+        bool not_stored;     /* assigned/pool, but the device cannot store (err: its Store Configuration error) */
+        uint8_t err;
         enum lss_status status;
         char message[160];
 } lss_outcome;

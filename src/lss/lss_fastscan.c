@@ -67,6 +67,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                              LSS_CS_IDENTIFY_SLAVE);
                                                 if (!step_answered(m))
                                                         s->value[s->sub] |= 1u << s->bit;
+                                                if (m->cancelling)
+                                                        goto out;
                                                 master_progress(m, (s->sub * 33.0 + (32 - s->bit)) / 133.0);
                                         }
                                 }

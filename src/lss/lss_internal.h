@@ -79,8 +79,24 @@ typedef struct lss_range_item {
         unsigned rechecks;      /* times this split was asked again */
 } lss_range_item;
 
+enum lss_confirm { CONFIRM_OK, CONFIRM_NOBODY, CONFIRM_OTHER, CONFIRM_UNCLEAR };
+
 typedef struct lss_scan_state {
-        int pc, vpc;
+        int pc, vpc, cpc, apc, rpc, hpc;
+        /* enumeration: bounds, what the last fastscan found, devices set aside */
+        unsigned rounds, phantoms, n_kept, n_aside, field, stuck;
+        bool restore;           /* slaves are set aside: a cancel waits for their give-back */
+        bool keep_stopped;      /* the caller stopped every device: keep those set aside stopped */
+        lss_device *again;      /* the candidate a round found a second time */
+        bool back_due[128];     /* by temporary node-ID: set aside, not yet seen back at 255 */
+        unsigned gb_try;
+        bool selected;          /* this round confirmed by a selective switch (all went to waiting first) */
+        bool misbehaving;       /* the pass ended on a slave that does not follow CiA 305 (result.id) */
+        uint64_t deadline;
+        lss_identity found, other, phantom;
+        enum lss_confirm confirm;
+        uint8_t node, temp, next_temp;
+        const bool *avoid;      /* 128 entries or NULL: node-IDs not to set anybody aside with */
         lss_fastscan_known known;
         lss_identify_range range;
         lss_fastscan_state fs;
@@ -189,6 +205,12 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s);
 int proc_assign(lss_master *m, lss_assign_state *s);
 int proc_fastscan_assign(lss_master *m, lss_assign_state *s);
 int proc_enumerate(lss_master *m, lss_scan_state *s);
+/* enumerate.c: Inquire Identity of the slave in configuration against
+ * s->found (s->confirm, s->other) */
+int proc_confirm_found(lss_master *m, lss_scan_state *s);
+/* scan.c: selective switch + Inquire Node-ID of each candidate (slowscan) */
+int verify_candidates(lss_master *m, lss_scan_state *s);
+int cand_add(lss_scan_state *s, const lss_identity *id);
 int proc_slowscan(lss_master *m, lss_scan_state *s);
 int proc_autoassign(lss_master *m);
 void lss_autoassign_free_state(lss_master *m);

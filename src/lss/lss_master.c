@@ -68,6 +68,16 @@ void master_progress(lss_master *m, double p) {
                 m->progress(m->progress_ud, p < 0 ? 0 : p > 1 ? 1 : p);
 }
 
+const char *lss_store_error_name(uint8_t err) {
+        switch (err) {
+        case LSS_ERR_OK: return "stored";
+        case LSS_ERR_STORE_NOT_SUPPORTED: return "storing not supported";
+        case LSS_ERR_STORE_MEDIA: return "storage media access error";
+        case LSS_ERR_SPECIFIC: return "manufacturer-specific error";
+        default: return "reserved error code";
+        }
+}
+
 void master_fail(lss_master *m, enum lss_status st, const char *fmt, ...) {
         va_list ap;
         m->result.status = st;
@@ -134,6 +144,7 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
         m->running = true;
         m->done = false;
         m->cancelling = false;
+        m->sc.restore = false;
         m->now = now;
         m->n_devices = 0;
         m->txq_head = m->txq_len = 0;
@@ -289,13 +300,34 @@ static int proc_nmt(lss_master *m) {
         PT_END(&m->pc);
 }
 
+/* The raw Fastscan: a found identity counts only when the slave in
+ * configuration confirms it by Inquire Identity (a slave answering requests
+ * that do not match it makes one up, e.g. 0:0:0:0). */
 static int proc_fastscan_top(lss_master *m) {
         PT_BEGIN(&m->pc);
         PT_CALL(&m->pc, proc_fastscan(m, &m->fs));
         if (m->fs.found) {
                 for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
-                        lss_identity_set_field(&m->result.id, i, m->fs.value[i]);
-                m->result.found = true;
+                        lss_identity_set_field(&m->sc.found, i, m->fs.value[i]);
+                m->sc.cpc = 0;
+                PT_CALL(&m->pc, proc_confirm_found(m, &m->sc));
+                m->result.id = m->sc.found;
+                if (m->sc.confirm == CONFIRM_OK)
+                        m->result.found = true;
+                else if (m->sc.confirm == CONFIRM_NOBODY)
+                        master_fail(m, LSS_E_NOT_FOUND, "no device: fastscan made up %08x:%08x:%08x:%08x but no slave "
+                                    "in configuration state confirmed it", m->sc.found.vendor, m->sc.found.product,
+                                    m->sc.found.revision, m->sc.found.serial);
+                else if (m->sc.confirm == CONFIRM_OTHER) {
+                        m->result.id = m->sc.other;
+                        master_fail(m, LSS_E_CONFLICT, "slave %08x:%08x:%08x:%08x entered configuration state on a "
+                                    "Fastscan for %08x:%08x:%08x:%08x: it does not follow CiA 305",
+                                    m->sc.other.vendor, m->sc.other.product, m->sc.other.revision, m->sc.other.serial,
+                                    m->sc.found.vendor, m->sc.found.product, m->sc.found.revision,
+                                    m->sc.found.serial);
+                } else
+                        master_fail(m, LSS_E_CONFLICT, "the identity fastscan found could not be confirmed: "
+                                    "several slaves answered Inquire Identity");
         } else if (m->fs.none)
                 master_fail(m, LSS_E_NOT_FOUND, "no non-configured slave answered the fastscan");
         else
@@ -441,7 +473,7 @@ int lss_master_nmt(lss_master *m, enum nmt_cs cs, uint8_t node_id, uint64_t now)
         return start_op(m, proc_nmt, false, now);
 }
 
-int lss_master_enumerate(lss_master *m, const lss_fastscan_known *known, uint64_t now) {
+static int start_enumerate(lss_master *m, const lss_fastscan_known *known, bool keep_stopped, uint64_t now) {
         if (!known_valid(known))
                 return -EINVAL;
         if (m->running)
@@ -449,7 +481,17 @@ int lss_master_enumerate(lss_master *m, const lss_fastscan_known *known, uint64_
         memset(&m->sc.known, 0, sizeof(m->sc.known));
         set_known(&m->sc.known, known);
         m->sc.pc = m->sc.vpc = 0;
+        m->sc.avoid = NULL;
+        m->sc.keep_stopped = keep_stopped;
         return start_op(m, proc_enumerate_top, true, now);
+}
+
+int lss_master_enumerate(lss_master *m, const lss_fastscan_known *known, uint64_t now) {
+        return start_enumerate(m, known, false, now);
+}
+
+int lss_master_enumerate_stopped(lss_master *m, const lss_fastscan_known *known, uint64_t now) {
+        return start_enumerate(m, known, true, now);
 }
 
 int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now) {
@@ -553,6 +595,8 @@ void lss_master_cancel(lss_master *m, uint64_t now) {
         if (!m->running)
                 return;
         m->cancelling = true;
+        if (m->sc.restore)
+                return; /* the enumeration gives the slaves it set aside back their 255 first */
         master_fail(m, LSS_E_CANCELLED, "cancelled");
         queue_switch_waiting(m);
         finish(m);

@@ -43,6 +43,8 @@ enum lss_status {
 };
 
 const char *lss_status_name(enum lss_status s);
+/* CiA 305's meaning of a Store Configuration error code. */
+const char *lss_store_error_name(uint8_t err);
 
 typedef struct lss_timing_config {
         uint32_t timeout_us;        /* fixed no-answer wait; also the adaptive start value */
@@ -75,6 +77,9 @@ typedef struct lss_identify_range {
 typedef struct lss_device {
         lss_identity id;
         uint8_t node_id;     /* 0xFF non-configured */
+        /* enumeration: the volatile node-ID it was set aside with while the
+         * pass went on (then given back 255 and reset); 0 = not touched */
+        uint8_t aside_node_id;
 } lss_device;
 
 typedef struct lss_result {
@@ -85,6 +90,8 @@ typedef struct lss_result {
         uint8_t node_id;     /* inquire node-ID; assign: old node-ID */
         bool changed;        /* assign: something was configured */
         bool in_use;         /* assign: the node-ID already answers on the bus */
+        bool not_stored;     /* assign: configured and verified, but the slave cannot store
+                              * (Store Configuration error 1 or 2 in err): volatile until a power cycle */
         lss_identity id;     /* fastscan, inquire identity */
         lss_device *devices; /* scans: every slave found (owned by the engine until next start) */
         size_t n_devices;
@@ -126,8 +133,25 @@ int lss_master_fastscan(lss_master *m, const lss_fastscan_known *known, uint64_t
 int lss_master_nmt(lss_master *m, enum nmt_cs cs, uint8_t node_id, uint64_t now);
 
 /* ---- procedures ---- */
-/* Every non-configured slave by fastscan, nothing assigned; all back in waiting. */
+/* Every non-configured slave by fastscan, nothing assigned; all back in
+ * waiting (lss_enumerate.c). Each slave found is confirmed by inquiry and
+ * set aside before the next round with a volatile pending node-ID from the
+ * top of the range that no device answers to (slaves such as CANopenNode's
+ * keep answering Fastscan in configuration state); at the end, also on
+ * failure or cancel, each gets 255 back, NMT Reset Communication, and is
+ * verified by inquiry (result devices[].aside_node_id). The pass ends after
+ * at most LSS_ENUMERATE_MAX_FINDS finds plus a margin of failed rounds, or
+ * at its deadline (lss_enumerate_deadline_us), and a slave that answers for
+ * identities not its own (found twice, or confirming another identity) ends
+ * it with LSS_E_CONFLICT naming it (result.id). */
 int lss_master_enumerate(lss_master *m, const lss_fastscan_known *known, uint64_t now);
+/* The same after the caller stopped every device (NMT) for slaves that take
+ * LSS only when stopped: those set aside are stopped again after taking
+ * their temporary node-ID and, all together, after the give-back. */
+int lss_master_enumerate_stopped(lss_master *m, const lss_fastscan_known *known, uint64_t now);
+#define LSS_ENUMERATE_MAX_FINDS 127u
+/* The enumeration's deadline for this timing, from its start. */
+uint64_t lss_enumerate_deadline_us(const lss_timing_config *c);
 /* Every slave (configured or not) in the ranges by identify-remote bisection,
  * each verified by selective switch and asked its node-ID; all back in waiting. */
 int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now);

@@ -1,30 +1,21 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
-/* Scans that find slaves without configuring anything.
- *
- * Enumeration: fastscan again and again; each slave found stays in
- * configuration state, so it no longer takes part, until a ping gets no
- * answer. Then all go back to waiting and every identity found is verified
- * by selective switch (the 0x44 answer can only come from a slave with that
- * exact identity) and asked its node-ID. A candidate that fails verification
- * was a scan error: it is dropped and the whole pass is run again.
- *
- * Slowscan: identify-remote-slave bisection over revision, then serial, for
+/* Slowscan: identify-remote-slave bisection over revision, then serial, for
  * one vendor/product; finds configured and non-configured slaves that
  * implement the identify services. A silent range is asked twice (the
  * whole range 1 + cfg.retries times) before it is dropped: a missed answer
  * would lose a slave silently. A range that answered but neither of whose
  * halves did lost an answer on the way: it is split and asked again (up to
  * cfg.retries times), and reported if that never resolves. Candidates are
- * verified the same way.
- *
- * Verification asks each candidate again when a step gets no answer: one
- * late or lost frame must not cost a pass over the whole bus. */
+ * verified by selective switch (the 0x44 answer can only come from a slave
+ * with that exact identity) and asked their node-ID; a step nobody answers
+ * is asked again: one late or lost frame must not cost a slave.
+ * (Enumeration by fastscan is in lss_enumerate.c.) */
 #include <errno.h>
 #include <stdlib.h>
 
 #include "lss/lss_internal.h"
 
-static int cand_add(lss_scan_state *s, const lss_identity *id) {
+int cand_add(lss_scan_state *s, const lss_identity *id) {
         if (s->n_cand == s->cap_cand) {
                 size_t cap = s->cap_cand ? s->cap_cand * 2 : 16;
                 lss_device *d = realloc(s->cand, cap * sizeof(*d));
@@ -81,7 +72,7 @@ static lss_range_item parent_of(const lss_range_item *hi) {
 
 /* Selective switch to each candidate, read its node-ID, back to waiting.
  * Verified ones become result devices; the others are counted in `dropped`. */
-static int verify_candidates(lss_master *m, lss_scan_state *s) {
+int verify_candidates(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->vpc);
         s->dropped = 0;
         for (s->i = 0; s->i < s->n_cand; s->i++) {
@@ -104,49 +95,6 @@ static int verify_candidates(lss_master *m, lss_scan_state *s) {
                 master_progress(m, 0.9 + 0.1 * (s->i + 1) / (double) s->n_cand);
         }
         PT_END(&s->vpc);
-}
-
-int proc_enumerate(lss_master *m, lss_scan_state *s) {
-        PT_BEGIN(&s->pc);
-        for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
-                s->n_cand = 0;
-                s->failed_scans = 0;
-                m->n_devices = 0;
-                for (;;) {
-                        s->fs = (lss_fastscan_state) { .known = s->known };
-                        PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
-                        if (s->fs.none)
-                                break;
-                        if (!s->fs.found) {
-                                /* the slaves found so far stay out of it: just scan again */
-                                if (++s->failed_scans <= m->timing.cfg.retries)
-                                        continue;
-                                master_fail(m, LSS_E_INCOMPLETE, "fastscan did not converge after %u slaves",
-                                            (unsigned) s->n_cand);
-                                goto out;
-                        }
-                        s->failed_scans = 0;
-                        {
-                                lss_identity id;
-                                for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
-                                        lss_identity_set_field(&id, i, s->fs.value[i]);
-                                if (cand_add(s, &id) < 0) {
-                                        master_fail(m, LSS_E_INCOMPLETE, "out of memory");
-                                        goto out;
-                                }
-                        }
-                        master_progress(m, 0.9 * (1.0 - 1.0 / (1.0 + (double) s->n_cand)));
-                }
-                STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
-                s->vpc = 0;
-                PT_CALL(&s->pc, verify_candidates(m, s));
-                if (m->result.status != LSS_OK || s->dropped == 0)
-                        goto out;
-                m->stats.retries++;
-        }
-        master_fail(m, LSS_E_INCOMPLETE, "%u slaves found by fastscan could not be verified", s->dropped);
-out:;
-        PT_END(&s->pc);
 }
 
 int proc_slowscan(lss_master *m, lss_scan_state *s) {

@@ -391,6 +391,9 @@ def test_raw():
         h('ConfigureBitTiming', 'yy', 0, 4)
         expect_eq(h_err('ConfigureBitTiming', 'yy', 0, 10)[0], INVALID_ARGS, 'ConfigureBitTiming 0/10')
         h('ActivateBitTiming', 'q', 20)  # same rate again: harmless
+        # the slaves are off the bus for 2 x the delay: a switch sent in that
+        # window is lost (and the selected slave stays in configuration)
+        time.sleep(0.1)
         h('SwitchModeGlobal', 'y', 0)
         expect_eq(h('SwitchModeSelective', 'uuuu', 1, 2, 3, 4), [False], 'SwitchModeSelective of nobody')
         expect_eq(h('IdentifyNonConfigured'), [True], 'IdentifyNonConfigured')

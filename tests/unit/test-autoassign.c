@@ -10,7 +10,10 @@ typedef struct frame_count {
 static void count(void *ud, const lss_frame *f, uint64_t t) {
         frame_count *c = ud;
         if (lss_is_request(f)) {
-                c->configure += f->data[0] == LSS_CS_CONFIGURE_NODE_ID;
+                /* a node-ID of the map or the pool: the enumeration sets
+                 * non-configured slaves aside with volatile node-IDs from
+                 * 127 down and gives them 255 back */
+                c->configure += f->data[0] == LSS_CS_CONFIGURE_NODE_ID && f->data[1] < 100;
                 c->store += f->data[0] == LSS_CS_STORE;
         }
         c->sdo += f->id >= 0x601 && f->id <= 0x67F;

@@ -21,8 +21,8 @@ START_TEST(fastscan_one) {
         ck_assert_int_eq(r->status, LSS_OK);
         ck_assert(lss_identity_equal(&r->id, &membus_slave(b, 0)->id));
         ck_assert(membus_slave(b, 0)->st.configuration);
-        /* ping + 4 x (32 bits + confirm) */
-        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 133);
+        /* ping + 4 x (32 bits + confirm), then the identity read back by inquiry */
+        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 133 + 4);
         lss_master_free(m);
         membus_free(b);
 }
@@ -48,8 +48,8 @@ START_TEST(fastscan_known_fields) {
         const lss_result *r = run(m, b);
         ck_assert_int_eq(r->status, LSS_OK);
         ck_assert_ptr_nonnull(membus_find(b, &r->id));
-        /* ping + 2 confirms + 2 x 33 */
-        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 69);
+        /* ping + 2 confirms + 2 x 33, inquiry of the 4 fields */
+        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 69 + 4);
         lss_master_free(m);
         membus_free(b);
 
@@ -68,7 +68,7 @@ START_TEST(fastscan_known_fields) {
         ck_assert_int_eq(r->status, LSS_OK);
         ck_assert(lss_identity_equal(&r->id, &id));
         /* ping, 3 known confirms, a check that somebody has the known top bits, 16 bits, confirm */
-        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 1 + 3 + 1 + 16 + 1);
+        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 1 + 3 + 1 + 16 + 1 + 4);
         k.known_bits[0] = 33;
         ck_assert_int_eq(lss_master_fastscan(m, &k, membus_now(b)), -EINVAL);
         lss_master_free(m);
@@ -189,7 +189,8 @@ START_TEST(enumerate_silent_and_nmt_stopped) {
         ck_assert_uint_eq(r->n_devices, 0);
         ck_assert_int_eq(lss_master_nmt(m, NMT_CS_STOP, 0, membus_now(b)), 0);
         run(m, b);
-        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        /* the slaves set aside go through a reset: stopped again after it */
+        ck_assert_int_eq(lss_master_enumerate_stopped(m, NULL, membus_now(b)), 0);
         r = run(m, b);
         ck_assert_int_eq(r->status, LSS_OK);
         ck_assert_uint_eq(r->n_devices, 2);
@@ -209,7 +210,7 @@ START_TEST(enumerate_early_config) {
                 ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
                 const lss_result *r = run(m, b);
                 assert_devices_real(b, r);
-                ck_assert_uint_ge(r->n_devices, 3);
+                ck_assert_msg(r->n_devices >= 3, "early config %d: %zu devices: %s", e, r->n_devices, r->message);
                 ck_assert(all_waiting(b));
                 lss_master_free(m);
                 membus_free(b);

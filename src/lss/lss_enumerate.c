@@ -1,0 +1,391 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Enumeration: every non-configured slave by fastscan, nothing assigned.
+ *
+ * CiA 305 has a slave found by fastscan wait in configuration state, where
+ * it takes no further part. The LSS slave of CANopenNode v4, the most used
+ * open-source stack, answers every Fastscan request in configuration state:
+ * a pass that relies on the rule finds the same slave, or a phantom
+ * 0:0:0:0, forever. So each round
+ *   1. fastscan finds identity F;
+ *   2. F is confirmed: read back by Inquire Identity from the one slave in
+ *      configuration (while a configured slave that took part is kept in
+ *      configuration: all back to waiting and a selective switch to F);
+ *   3. a non-configured slave is set aside: it gets a volatile pending
+ *      node-ID T nobody answers to (SDO probe), goes back to waiting, takes
+ *      T and stops answering Fastscan; a configured one stays in
+ *      configuration (it should not have answered at all).
+ * At the end, also on failure or cancel, every slave set aside gets 255
+ * back and NMT Reset Communication on T, and every one is verified by
+ * selective switch and Inquire Node-ID.
+ * Bounds: LSS_ENUMERATE_MAX_FINDS finds, cfg.retries failed rounds in a row,
+ * a deadline; a slave found again after it was set aside, one that confirms
+ * an identity other than the one found, or a phantom found twice ends the
+ * pass with LSS_E_CONFLICT naming it (result.id). */
+#include <inttypes.h>
+#include <string.h>
+
+#include "lss/lss_internal.h"
+
+#define SEND(m, pc, frame_expr) STEP_REQUEST(m, pc, frame_expr, -1)
+#define ID_FMT "%08x:%08x:%08x:%08x"
+#define ID_ARGS(id) (id).vendor, (id).product, (id).revision, (id).serial
+/* what a device is given after NMT Reset Communication before it is asked */
+#define RESET_SETTLE_US 50000u
+/* a fastscan: 1 ping + 4 x (32 bits + a confirmation) */
+#define FASTSCAN_STEPS 133u
+
+uint64_t lss_enumerate_deadline_us(const lss_timing_config *c) {
+        /* every step of every possible find waiting twice the full timeout */
+        uint64_t round = (uint64_t) FASTSCAN_STEPS * 2u * ((uint64_t) c->timeout_us + c->guard_floor_us);
+        return (LSS_ENUMERATE_MAX_FINDS + 1u) * round;
+}
+
+static lss_device *found_before(lss_scan_state *s, const lss_identity *id) {
+        for (size_t i = 0; i < s->n_cand; i++)
+                if (lss_identity_equal(&s->cand[i].id, id))
+                        return &s->cand[i];
+        return NULL;
+}
+
+/* Kept in configuration (until the give-back reads the real node-ID). */
+static bool kept(const lss_device *d) {
+        return d->node_id != LSS_NODE_ID_UNCONFIGURED;
+}
+
+static void add_nmt(lss_master *m, enum nmt_cs cs, uint8_t node) {
+        lss_frame f;
+        nmt_encode(&f, cs, node);
+        step_add_tx(m, &f);
+}
+
+/* Inquire Identity of the slave in configuration, against s->found. */
+int proc_confirm_found(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->cpc);
+        s->confirm = CONFIRM_OK;
+        s->other = s->found;
+        for (s->field = 0; s->field < LSS_FIELD_COUNT; s->field++) {
+                REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_inquire(&f__, s->field),
+                                LSS_CS_INQUIRE_VENDOR + (int) s->field);
+                if (!step_answered(m) || step_conflict(m)) {
+                        s->confirm = !step_answered(m) && s->field == 0 ? CONFIRM_NOBODY : CONFIRM_UNCLEAR;
+                        break;
+                }
+                lss_identity_set_field(&s->other, s->field, lss_get_u32(m->step.answer.data + 1));
+        }
+        if (s->confirm == CONFIRM_OK && !lss_identity_equal(&s->other, &s->found))
+                s->confirm = CONFIRM_OTHER;
+        PT_END(&s->cpc);
+}
+
+/* With configured slaves kept in configuration an inquiry would have them
+ * answer too: all back to waiting, and only F answers a selective switch. */
+static int confirm_by_selection(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->cpc);
+        s->selected = true;
+        SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        SELECT_RETRIED(m, &s->cpc, s->attempt, &s->found);
+        s->confirm = !step_answered(m) ? CONFIRM_NOBODY : step_conflict(m) ? CONFIRM_UNCLEAR : CONFIRM_OK;
+        PT_END(&s->cpc);
+}
+
+/* The kept slaves back into configuration after a switch to waiting. */
+static int reselect_kept(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->rpc);
+        for (s->i = 0; s->i < s->n_cand; s->i++)
+                if (kept(&s->cand[s->i])) {
+                        /* a silent one shows in the verification */
+                        SELECT_RETRIED(m, &s->rpc, s->attempt, &s->cand[s->i].id);
+                }
+        PT_END(&s->rpc);
+}
+
+/* A volatile pending node-ID for the confirmed slave in configuration, from
+ * the top of the range down, that nobody answers to; back to waiting, where
+ * it takes that ID (CiA 305) and stops taking part. */
+static int set_aside(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->apc);
+        for (;;) {
+                while (s->next_temp >= LSS_NODE_ID_MIN && s->avoid && s->avoid[s->next_temp])
+                        s->next_temp--;
+                if (s->next_temp < LSS_NODE_ID_MIN) {
+                        master_fail(m, LSS_E_INCOMPLETE, "no free node-ID left to set slave " ID_FMT " aside",
+                                    ID_ARGS(s->found));
+                        goto out;
+                }
+                s->temp = s->next_temp--;
+                step_node_in_use(m, s->temp);
+                PT_YIELD(&s->apc);
+                if (m->step.n_answers == 0)
+                        break;
+        }
+        REQUEST_RETRIED(m, &s->apc, s->attempt, lss_encode_configure_node_id(&f__, s->temp),
+                        LSS_CS_CONFIGURE_NODE_ID);
+        if (!step_answered(m) || step_conflict(m) || m->step.answer.data[1] != 0) {
+                master_fail(m, LSS_E_INCOMPLETE, "slave " ID_FMT " did not take a temporary node-ID (%s)",
+                            ID_ARGS(s->found), !step_answered(m) ? "no answer" :
+                            step_conflict(m) ? "several answers" : "refused");
+                goto out;
+        }
+        if (cand_add(s, &s->found) < 0) {
+                master_fail(m, LSS_E_INCOMPLETE, "out of memory");
+                goto out;
+        }
+        s->cand[s->n_cand - 1].aside_node_id = s->temp;
+        s->back_due[s->temp] = true;
+        s->n_aside++;
+        SEND(m, &s->apc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        if (s->keep_stopped) {
+                /* taking T reset it into pre-operational */
+                SEND(m, &s->apc, nmt_encode(&f__, NMT_CS_STOP, s->temp));
+        }
+out:;
+        PT_END(&s->apc);
+}
+
+/* A slave set aside that has not been seen back at 255 yet. */
+static bool back_due(const lss_scan_state *s, const lss_device *d) {
+        return d->aside_node_id && s->back_due[d->aside_node_id];
+}
+
+/* 255 and a reset for every slave set aside (asked again for one still at
+ * its temporary node-ID: a frame lost on the way costs a retry, not a
+ * device left at a node-ID it was never given), then every one verified by
+ * selective switch and Inquire Node-ID; the verified become result devices. */
+static int give_back(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->vpc);
+        for (s->i = 0; s->i < s->n_cand; s->i++)
+                s->cand[s->i].node_id = 0; /* not verified */
+        for (s->gb_try = 0;; s->gb_try++) {
+                SEND(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                for (s->i = 0; s->i < s->n_cand; s->i++) {
+                        if (!back_due(s, &s->cand[s->i]))
+                                continue;
+                        SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->i].id);
+                        if (!step_answered(m))
+                                continue; /* still reset below; the verification says the rest */
+                        REQUEST_RETRIED(m, &s->vpc, s->attempt,
+                                        lss_encode_configure_node_id(&f__, LSS_NODE_ID_UNCONFIGURED),
+                                        LSS_CS_CONFIGURE_NODE_ID);
+                        SEND(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                }
+                /* the resets, a few frames a step (the transmit queue is short) */
+                for (s->i = 0; s->n_aside > 0 && s->i < s->n_cand;) {
+                        m->step = (lss_step) { .kind = STEP_DELAY };
+                        for (; s->i < s->n_cand && m->step.n_tx < LSS_MAX_TX - 1; s->i++)
+                                if (back_due(s, &s->cand[s->i]))
+                                        add_nmt(m, NMT_CS_RESET_COMMUNICATION, s->cand[s->i].aside_node_id);
+                        if (s->i == s->n_cand) {
+                                /* devices that take LSS only when stopped were reset into pre-operational */
+                                if (s->keep_stopped)
+                                        add_nmt(m, NMT_CS_STOP, 0);
+                                m->step.wait_us = RESET_SETTLE_US;
+                        }
+                        step_start(m);
+                        PT_YIELD(&s->vpc);
+                }
+                s->stuck = 0;
+                for (s->i = 0; s->i < s->n_cand; s->i++) {
+                        if (s->gb_try > 0 && !back_due(s, &s->cand[s->i]))
+                                continue;
+                        SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->i].id);
+                        if (!step_answered(m))
+                                continue;
+                        REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                        LSS_CS_INQUIRE_NODE_ID);
+                        if (step_answered(m) && !step_conflict(m)) {
+                                s->cand[s->i].node_id = m->step.answer.data[1];
+                                if (s->cand[s->i].aside_node_id &&
+                                    s->cand[s->i].node_id == LSS_NODE_ID_UNCONFIGURED)
+                                        s->back_due[s->cand[s->i].aside_node_id] = false;
+                        }
+                        SEND(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                        master_progress(m, 0.9 + 0.1 * (s->i + 1) / (double) s->n_cand);
+                }
+                for (s->i = 0; s->i < s->n_cand; s->i++)
+                        s->stuck += back_due(s, &s->cand[s->i]);
+                if (s->stuck == 0 || s->gb_try >= m->timing.cfg.retries)
+                        break;
+                m->stats.retries++;
+        }
+        s->dropped = 0;
+        for (s->i = 0; s->i < s->n_cand; s->i++) {
+                const lss_device *d = &s->cand[s->i];
+                if (d->node_id == 0)
+                        s->dropped++;
+                else if (master_add_device(m, &d->id, d->node_id) < 0)
+                        master_fail(m, LSS_E_INCOMPLETE, "out of memory");
+                else
+                        m->devices[m->n_devices - 1].aside_node_id = d->aside_node_id;
+        }
+        s->restore = false;
+        PT_END(&s->vpc);
+}
+
+static void misbehaving(lss_master *m, lss_scan_state *s, const lss_identity *id, const char *what) {
+        m->result.id = *id;
+        s->misbehaving = true;
+        master_fail(m, LSS_E_CONFLICT, "slave " ID_FMT " %s: it does not follow CiA 305, the enumeration stopped",
+                    ID_ARGS(*id), what);
+}
+
+/* One round after fastscan found s->found: confirm it, then keep it in
+ * configuration or set it aside. Ends the pass (status) when a slave
+ * misbehaves; s->confirm tells the caller how the round went. */
+static int handle_found(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->hpc);
+        s->cpc = 0;
+        s->selected = false;
+        if (s->n_kept == 0)
+                PT_CALL(&s->hpc, proc_confirm_found(m, s));
+        if (s->n_kept > 0 || s->confirm == CONFIRM_UNCLEAR) {
+                /* another slave in configuration too (one that went there
+                 * early, or kept): the selective switch singles F out */
+                s->cpc = 0;
+                PT_CALL(&s->hpc, confirm_by_selection(m, s));
+        }
+        if (s->confirm == CONFIRM_OK) {
+                REQUEST_RETRIED(m, &s->hpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                LSS_CS_INQUIRE_NODE_ID);
+                if (step_answered(m) && !step_conflict(m))
+                        s->node = m->step.answer.data[1];
+                else
+                        s->confirm = CONFIRM_UNCLEAR;
+        }
+        if (s->confirm == CONFIRM_OK && (s->again = found_before(s, &s->found)) != NULL) {
+                /* Set aside, it still took part (a slave that answers
+                 * Fastscan with a node-ID): keep it in configuration. Found
+                 * there too, it answers in every state. */
+                if (kept(s->again) || s->node == LSS_NODE_ID_UNCONFIGURED) {
+                        misbehaving(m, s, &s->found, "answered Fastscan again after it was set aside");
+                        goto out;
+                }
+                s->again->node_id = s->node;
+                s->n_kept++;
+                goto reselect;
+        }
+        if (s->confirm == CONFIRM_OTHER) {
+                misbehaving(m, s, &s->other, "entered configuration state on a Fastscan for another identity");
+                goto out;
+        }
+        if (s->confirm == CONFIRM_NOBODY) {
+                /* nobody in configuration: the identity was made of answers
+                 * to requests that matched nobody */
+                if (s->phantoms++ > 0 && (lss_identity_equal(&s->found, &s->phantom) ||
+                                          s->phantoms > m->timing.cfg.retries)) {
+                        m->result.id = s->found;
+                        s->misbehaving = true;
+                        master_fail(m, LSS_E_CONFLICT,
+                                    "Fastscan found " ID_FMT " %u times but no slave confirmed it: a slave answers "
+                                    "Fastscan requests that do not match it, the enumeration stopped",
+                                    ID_ARGS(s->found), s->phantoms);
+                        goto out;
+                }
+                s->phantom = s->found;
+        } else if (s->confirm == CONFIRM_UNCLEAR) {
+                SEND(m, &s->hpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        } else if (s->node != LSS_NODE_ID_UNCONFIGURED) {
+                /* configured, yet it took part: leave it in configuration */
+                if (cand_add(s, &s->found) < 0) {
+                        master_fail(m, LSS_E_INCOMPLETE, "out of memory");
+                        goto out;
+                }
+                s->cand[s->n_cand - 1].node_id = s->node;
+                s->n_kept++;
+        } else {
+                s->apc = 0;
+                s->restore = true;
+                PT_CALL(&s->hpc, set_aside(m, s));
+                if (m->result.status != LSS_OK)
+                        goto out;
+        }
+reselect:
+        /* Kept ones were let go by a switch to waiting in this round: the
+         * selection (whenever one was kept before), an unclear round, or
+         * setting a slave aside. Only the first kept one found by inquiry
+         * saw no switch. */
+        if (s->n_kept > 0 && (s->n_kept > 1 || s->confirm != CONFIRM_OK || s->node == LSS_NODE_ID_UNCONFIGURED ||
+                              s->selected)) {
+                s->rpc = 0;
+                PT_CALL(&s->hpc, reselect_kept(m, s));
+        }
+out:;
+        PT_END(&s->hpc);
+}
+
+int proc_enumerate(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->pc);
+        s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
+        s->misbehaving = false;
+        for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
+                s->n_cand = s->n_aside = s->n_kept = 0;
+                s->rounds = s->phantoms = s->failed_scans = 0;
+                s->next_temp = LSS_NODE_ID_MAX;
+                memset(s->back_due, 0, sizeof(s->back_due));
+                m->n_devices = 0;
+                /* nobody left in configuration from before */
+                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                while (!m->cancelling) {
+                        if (s->rounds++ >= LSS_ENUMERATE_MAX_FINDS + 2u * (m->timing.cfg.retries + 1u)) {
+                                master_fail(m, LSS_E_INCOMPLETE, "the enumeration stopped at its bound of %u "
+                                            "fastscan rounds (%zu slaves found)", s->rounds - 1, s->n_cand);
+                                break;
+                        }
+                        if (m->now >= s->deadline) {
+                                master_fail(m, LSS_E_INCOMPLETE, "the enumeration stopped at its deadline of %" PRIu64
+                                            " s (%zu slaves found)", lss_enumerate_deadline_us(&m->timing.cfg) / 1000000u,
+                                            s->n_cand);
+                                break;
+                        }
+                        s->fs = (lss_fastscan_state) { .known = s->known };
+                        PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
+                        if (s->fs.none || m->cancelling)
+                                break;
+                        if (!s->fs.found) {
+                                if (++s->failed_scans <= m->timing.cfg.retries)
+                                        continue;
+                                master_fail(m, LSS_E_INCOMPLETE, "fastscan did not converge after %zu slaves",
+                                            s->n_cand);
+                                break;
+                        }
+                        for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
+                                lss_identity_set_field(&s->found, i, s->fs.value[i]);
+                        s->hpc = 0;
+                        PT_CALL(&s->pc, handle_found(m, s));
+                        if (m->result.status != LSS_OK)
+                                break;
+                        if (s->confirm == CONFIRM_UNCLEAR && ++s->failed_scans > m->timing.cfg.retries) {
+                                master_fail(m, LSS_E_CONFLICT, "the slave found by fastscan (" ID_FMT ") could not "
+                                            "be confirmed: several slaves answered", ID_ARGS(s->found));
+                                break;
+                        }
+                        if (s->confirm == CONFIRM_OK)
+                                s->failed_scans = 0;
+                        master_progress(m, 0.9 * (1.0 - 1.0 / (1.0 + (double) s->n_cand)));
+                }
+                /* also after a failure or a cancel: nobody keeps a temporary node-ID */
+                s->vpc = 0;
+                PT_CALL(&s->pc, give_back(m, s));
+                if (m->cancelling) {
+                        master_fail(m, LSS_E_CANCELLED, "cancelled (the slaves set aside were given node-ID 255 "
+                                    "back first)");
+                        goto out;
+                }
+                if (m->result.status != LSS_OK)
+                        goto out;
+                if (s->stuck > 0) {
+                        for (s->i = 0; !back_due(s, &s->cand[s->i]); s->i++)
+                                ;
+                        m->result.id = s->cand[s->i].id;
+                        master_fail(m, LSS_E_INCOMPLETE, "%u slaves kept the temporary node-ID they were set aside "
+                                    "with, " ID_FMT " node-ID %u first (reset them or power them off and on)",
+                                    s->stuck, ID_ARGS(s->cand[s->i].id), s->cand[s->i].aside_node_id);
+                        goto out;
+                }
+                if (s->dropped == 0)
+                        goto out;
+                m->stats.retries++;
+        }
+        master_fail(m, LSS_E_INCOMPLETE, "%u slaves found by fastscan could not be verified", s->dropped);
+out:;
+        PT_END(&s->pc);
+}
