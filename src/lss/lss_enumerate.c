@@ -47,9 +47,12 @@ static lss_device *found_before(lss_scan_state *s, const lss_identity *id) {
         return NULL;
 }
 
-/* Kept in configuration (until the give-back reads the real node-ID). */
+/* While the pass runs a candidate's node_id is 0 when it was set aside, else
+ * the node-ID it answered with: it is kept in configuration (a configured
+ * slave that took part, or one that refused a temporary node-ID) until the
+ * give-back reads the real one. */
 static bool kept(const lss_device *d) {
-        return d->node_id != LSS_NODE_ID_UNCONFIGURED;
+        return d->node_id != 0;
 }
 
 static void add_nmt(lss_master *m, enum nmt_cs cs, uint8_t node) {
@@ -120,16 +123,22 @@ static int set_aside(lss_master *m, lss_scan_state *s) {
         }
         REQUEST_RETRIED(m, &s->apc, s->attempt, lss_encode_configure_node_id(&f__, s->temp),
                         LSS_CS_CONFIGURE_NODE_ID);
-        if (!step_answered(m) || step_conflict(m) || m->step.answer.data[1] != 0) {
+        if (!step_answered(m) || step_conflict(m)) {
                 master_fail(m, LSS_E_INCOMPLETE, "slave " ID_FMT " did not take a temporary node-ID (%s)",
-                            ID_ARGS(s->found), !step_answered(m) ? "no answer" :
-                            step_conflict(m) ? "several answers" : "refused");
+                            ID_ARGS(s->found), !step_answered(m) ? "no answer" : "several answers");
                 goto out;
         }
         if (cand_add(s, &s->found) < 0) {
                 master_fail(m, LSS_E_INCOMPLETE, "out of memory");
                 goto out;
         }
+        if (m->step.answer.data[1] != 0) {
+                /* refused (a device with a narrower node-ID range): it stays
+                 * in configuration, where a CiA 305 slave takes no part */
+                s->n_kept++;
+                goto out;
+        }
+        s->cand[s->n_cand - 1].node_id = 0;
         s->cand[s->n_cand - 1].aside_node_id = s->temp;
         s->back_due[s->temp] = true;
         s->n_aside++;

@@ -174,6 +174,30 @@ START_TEST(enumerate_without_identify) {
 }
 END_TEST
 
+/* A slave that refuses the temporary node-ID it would be set aside with (a
+ * narrower node-ID range) is kept in configuration instead: the pass goes
+ * on, finds the others and leaves every slave as it was. */
+START_TEST(enumerate_refused_temporary) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        membus *b = bus_random(4, 37, 0, 0, &f);
+        membus_slave(b, 1)->faults.configure_error_specific = true;
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->n_devices, 4);
+        assert_devices_real(b, r);
+        for (size_t i = 0; i < 4; i++) {
+                ck_assert_uint_eq(membus_slave(b, i)->st.active_node_id, 0xFF);
+                ck_assert_uint_eq(membus_slave(b, i)->st.pending_node_id, 0xFF);
+        }
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* Silent slaves and slaves that want NMT Stopped are not found; no error. */
 START_TEST(enumerate_silent_and_nmt_stopped) {
         lss_slave_faults f;
@@ -288,6 +312,7 @@ int main(void) {
         tcase_add_test(tc, enumerate_127);
         tcase_add_test(tc, enumerate_skips_configured);
         tcase_add_test(tc, enumerate_without_identify);
+        tcase_add_test(tc, enumerate_refused_temporary);
         tcase_add_test(tc, enumerate_silent_and_nmt_stopped);
         tcase_add_test(tc, enumerate_early_config);
         tcase_add_test(tc, enumerate_duplicate_answers);
