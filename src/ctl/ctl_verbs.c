@@ -21,20 +21,43 @@ typedef struct found {
         const char *ifname;
         uint32_t id[4];
         uint8_t old_id, new_id;   /* scan: new_id is the node-ID */
+        char *outcome, *detail;   /* auto-assign */
 } found;
 
 typedef struct results {
         found *v;
         size_t n;
+        bool partial;             /* auto-assign: some bus does not match its map */
 } results;
 
-static int results_add(results *res, const char *ifname, const uint32_t id[4], uint8_t old_id, uint8_t new_id) {
+static int results_add(results *res, const char *ifname, const uint32_t id[4], uint8_t old_id, uint8_t new_id,
+                       const char *outcome, const char *detail) {
         found *v = realloc(res->v, (res->n + 1) * sizeof(*v));
         if (!v)
                 return -ENOMEM;
         res->v = v;
-        res->v[res->n++] = (found) { ifname, { id[0], id[1], id[2], id[3] }, old_id, new_id };
+        found *f = &res->v[res->n++];
+        *f = (found) { ifname, { id[0], id[1], id[2], id[3] }, old_id, new_id, NULL, NULL };
+        if (outcome && (!(f->outcome = strdup(outcome)) || !(f->detail = strdup(detail))))
+                return -ENOMEM;
         return 0;
+}
+
+static void results_free(results *res) {
+        for (size_t i = 0; i < res->n; i++) {
+                free(res->v[i].outcome);
+                free(res->v[i].detail);
+        }
+        free(res->v);
+}
+
+/* auto-assign outcomes that leave the bus unlike its map */
+static bool outcome_is_problem(const char *outcome) {
+        return strcmp(outcome, "missing") == 0 || strcmp(outcome, "conflict") == 0 || strcmp(outcome, "failed") == 0;
+}
+
+static bool outcome_is_change(const char *outcome) {
+        return strcmp(outcome, "assigned") == 0 || strcmp(outcome, "pool") == 0;
 }
 
 /* after ^C: the job was cancelled (or still queued), lssctl exits 130 */
@@ -80,7 +103,38 @@ static int append_bool_option(sd_bus_message *m, const char *key, bool value) {
         return sd_bus_message_append(m, "{sv}", key, "b", value);
 }
 
+/* auto-assign: the count of each outcome, and each problem on stderr */
+static void print_outcome_summary(const results *res) {
+        static const char *const kinds[] = { "assigned", "pool", "unchanged", "unknown", "missing", "conflict",
+                                             "failed" };
+        size_t changed = 0;
+        for (size_t i = 0; i < res->n; i++)
+                changed += outcome_is_change(res->v[i].outcome);
+        printf("%zu node-ID%s assigned", changed, changed == 1 ? "" : "s");
+        for (size_t k = 2; k < sizeof(kinds) / sizeof(kinds[0]); k++) {
+                size_t n = 0;
+                for (size_t i = 0; i < res->n; i++)
+                        n += strcmp(res->v[i].outcome, kinds[k]) == 0;
+                if (n > 0)
+                        printf(", %zu %s", n, kinds[k]);
+        }
+        printf(".\n");
+}
+
+static void print_problems(const results *res) {
+        for (size_t i = 0; i < res->n; i++) {
+                const found *f = &res->v[i];
+                if (!outcome_is_problem(f->outcome))
+                        continue;
+                fprintf(stderr, "lssctl: %s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32
+                        " %s%s%s\n", f->ifname, f->id[0], f->id[1], f->id[2], f->id[3], f->outcome,
+                        f->detail[0] ? ": " : "", f->detail);
+        }
+}
+
 static void print_results(ctl_context *c, const results *res, bool assignments) {
+        if (assignments)
+                print_problems(res);
         if (c->json) {
                 ctl_json j;
                 ctl_json_init(&j, stdout);
@@ -97,6 +151,12 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                         } else
                                 ctl_json_key(&j, "node_id");
                         ctl_json_uint(&j, res->v[i].new_id);
+                        if (assignments) {
+                                ctl_json_key(&j, "outcome");
+                                ctl_json_string(&j, res->v[i].outcome);
+                                ctl_json_key(&j, "detail");
+                                ctl_json_string(&j, res->v[i].detail);
+                        }
                         ctl_json_object_end(&j);
                 }
                 ctl_json_array_end(&j);
@@ -106,22 +166,25 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
 
         static const char *const scan_columns[] = { "BUS", "VENDOR", "PRODUCT", "REVISION", "SERIAL", ">NODE" };
         static const char *const assign_columns[] = { "BUS", "VENDOR", "PRODUCT", "REVISION", "SERIAL", ">OLD",
-                                                      ">NEW" };
+                                                      ">NEW", "OUTCOME" };
         ctl_table *t;
-        if (ctl_table_new(&t, assignments ? 7 : 6, assignments ? assign_columns : scan_columns) < 0)
+        if (ctl_table_new(&t, assignments ? 8 : 6, assignments ? assign_columns : scan_columns) < 0)
                 return;
         for (size_t i = 0; i < res->n; i++) {
                 const found *f = &res->v[i];
+                bool missing = assignments && strcmp(f->outcome, "missing") == 0;
                 ctl_table_add(t, NULL, "%s", f->ifname);
                 ctl_table_identity(t, f->id);
-                if (assignments && f->old_id == 0xFF)
+                if (missing || (assignments && f->old_id == 0xFF))
                         ctl_table_add(t, NULL, "-");
                 else if (assignments)
                         ctl_table_add(t, NULL, "%u", f->old_id);
-                if (f->new_id == 0xFF)
+                if (missing || f->new_id == 0xFF)
                         ctl_table_add(t, CTL_ANSI_YELLOW, "-");
                 else
                         ctl_table_add(t, NULL, "%u", f->new_id);
+                if (assignments)
+                        ctl_table_add(t, outcome_is_problem(f->outcome) ? CTL_ANSI_RED : NULL, "%s", f->outcome);
         }
         if (res->n > 0)
                 ctl_table_print(t, stdout, !c->no_legend, c->colors);
@@ -129,7 +192,7 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                 if (res->n > 0)
                         putchar('\n');
                 if (assignments)
-                        printf("%zu node-ID%s assigned.\n", res->n, res->n == 1 ? "" : "s");
+                        print_outcome_summary(res);
                 else
                         printf("%zu device%s found.\n", res->n, res->n == 1 ? "" : "s");
         }
@@ -184,14 +247,24 @@ static int scan_like(ctl_context *c, bool assign) {
                 if (r < 0)
                         goto finish;
 
-                r = sd_bus_message_enter_container(reply, 'a', assign ? "(uuuuyy)" : "(uuuuy)");
+                r = sd_bus_message_enter_container(reply, 'a', assign ? "(uuuuyyss)" : "(uuuuy)");
                 while (r > 0) {
                         uint32_t id[4];
                         uint8_t a = 0xFF, b = 0xFF;
-                        r = assign ? sd_bus_message_read(reply, "(uuuuyy)", &id[0], &id[1], &id[2], &id[3], &a, &b)
+                        const char *outcome = NULL, *detail = NULL;
+                        r = assign ? sd_bus_message_read(reply, "(uuuuyyss)", &id[0], &id[1], &id[2], &id[3], &a, &b,
+                                                         &outcome, &detail)
                                    : sd_bus_message_read(reply, "(uuuuy)", &id[0], &id[1], &id[2], &id[3], &b);
-                        if (r > 0 && results_add(&res, ifnames[i], id, a, b) < 0)
+                        if (r > 0 && results_add(&res, ifnames[i], id, a, b, outcome, detail) < 0)
                                 r = -ENOMEM;
+                }
+                if (r >= 0 && assign) {
+                        const char *result = NULL;
+                        r = sd_bus_message_exit_container(reply);
+                        if (r >= 0)
+                                r = sd_bus_message_read(reply, "s", &result);
+                        if (r >= 0 && strcmp(result, "done") != 0)
+                                res.partial = true;
                 }
                 sd_bus_message_unref(reply);
                 if (r < 0) {
@@ -201,11 +274,18 @@ static int scan_like(ctl_context *c, bool assign) {
         }
         print_results(c, &res, assign);
         r = 0;
+        if (res.partial) {
+                size_t bad = 0;
+                for (size_t i = 0; i < res.n; i++)
+                        bad += outcome_is_problem(res.v[i].outcome);
+                r = ctl_fail(c, CTL_EXIT_PARTIAL, -EAGAIN, "The bus does not match the map: %zu mapped device%s "
+                             "missing, in conflict or failed.", bad, bad == 1 ? "" : "s");
+        }
 finish:
         ctl_runner_free(run);
         ctl_strv_free(paths, n);
         ctl_strv_free(ifnames, n);
-        free(res.v);
+        results_free(&res);
         return r;
 }
 

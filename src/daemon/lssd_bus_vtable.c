@@ -283,7 +283,7 @@ const sd_bus_vtable lssd_bus_vtable[] = {
                                 method_scan, SD_BUS_VTABLE_UNPRIVILEGED),
         SD_BUS_METHOD_WITH_ARGS("AutoAssign",
                                 SD_BUS_ARGS("a{sv}", options),
-                                SD_BUS_RESULT("a(uuuuyy)", assignments),
+                                SD_BUS_RESULT("a(uuuuyyss)", outcomes, "s", result),
                                 method_auto_assign, SD_BUS_VTABLE_UNPRIVILEGED),
         SD_BUS_METHOD_WITH_ARGS("AssignNodeId",
                                 SD_BUS_ARGS("u", vendor, "u", product, "u", revision, "u", serial, "y", node_id,

@@ -479,8 +479,18 @@ static void autoassign_publish_one(lssd_bus *b, const lssd_job *j, const lss_out
         }
 }
 
+/* What an outcome needs said beyond its kind ("" when nothing): the
+ * journal line and the reply's detail. */
+static void outcome_detail(const lss_outcome *o, char *buf, size_t size) {
+        buf[0] = '\0';
+        if (o->not_stored)
+                snprintf(buf, size, "not stored (device cannot store: %s)", lss_store_error_name(o->err));
+        else if (o->message[0])
+                snprintf(buf, size, "%s", o->message);
+}
+
 static void autoassign_log_one(lssd_bus *b, const lss_outcome *o) {
-        char ident[40], detail[200] = "";
+        char ident[40], detail[200];
         int priority = LOG_INFO;
 
         lssd_identity_format(&o->id, ident, sizeof(ident));
@@ -497,13 +507,10 @@ static void autoassign_log_one(lssd_bus *b, const lss_outcome *o) {
         default:
                 break;
         }
-        if (o->not_stored)
-                snprintf(detail, sizeof(detail), ", not stored (device cannot store: %s)",
-                         lss_store_error_name(o->err));
-        else if (o->message[0])
-                snprintf(detail, sizeof(detail), ": %s", o->message);
-        lssd_log_device(priority, b->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s",
-                        b->ifname, ident, lss_outcome_name(o->kind), o->old_node_id, o->new_node_id, detail);
+        outcome_detail(o, detail, sizeof(detail));
+        lssd_log_device(priority, b->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s%s",
+                        b->ifname, ident, lss_outcome_name(o->kind), o->old_node_id, o->new_node_id,
+                        !detail[0] ? "" : o->not_stored ? ", " : ": ", detail);
 }
 
 static bool outcome_changed(const lss_outcome *o) {
@@ -563,22 +570,28 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         }
 
         log_notice("AutoAssign on %s", j->summary);
-        j->result = count[LSS_OUTCOME_CONFLICT] + count[LSS_OUTCOME_FAILED] > 0 ? "partial" : "done";
+        /* the bus matches the map only when every mapped device has its node-ID */
+        j->result = count[LSS_OUTCOME_MISSING] + count[LSS_OUTCOME_CONFLICT] + count[LSS_OUTCOME_FAILED] > 0 ?
+                "partial" : "done";
 
         if (!j->request)
                 return 0;
         sd_bus_message *reply = NULL;
         int k = sd_bus_message_new_method_return(j->request, &reply);
         if (k >= 0)
-                k = sd_bus_message_open_container(reply, 'a', "(uuuuyy)");
+                k = sd_bus_message_open_container(reply, 'a', "(uuuuyyss)");
         for (size_t i = 0; k >= 0 && i < n; i++) {
                 const lss_outcome *o = &out[i];
-                if (outcome_changed(o))
-                        k = sd_bus_message_append(reply, "(uuuuyy)", o->id.vendor, o->id.product, o->id.revision,
-                                                  o->id.serial, o->old_node_id, o->new_node_id);
+                char detail[200];
+                outcome_detail(o, detail, sizeof(detail));
+                k = sd_bus_message_append(reply, "(uuuuyyss)", o->id.vendor, o->id.product, o->id.revision,
+                                          o->id.serial, o->old_node_id, o->new_node_id, lss_outcome_name(o->kind),
+                                          detail);
         }
         if (k >= 0)
                 k = sd_bus_message_close_container(reply);
+        if (k >= 0)
+                k = sd_bus_message_append(reply, "s", j->result);
         if (k >= 0)
                 reply_message(j, reply);
         else

@@ -17,8 +17,8 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from lssdtest import (BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, Env, Skip, Slave, bus_path,  # noqa: E402
-                      device_path, run, unit_exec_start)
+from lssdtest import (BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, Env, Skip, Slave, auto_assign,  # noqa: E402
+                      bus_path, device_path, run, unit_exec_start)
 
 B0 = bus_path('vcan0')
 CS_CONFIGURE_NODE_ID = 0x11
@@ -164,8 +164,16 @@ def test_mixed():
     with Env({'vcan0': MIXED}, config=cfg, candump=True) as env:
         c = env.connect()
         c.add_match("type='signal',sender='org.lssd.LSS1'")
-        got = sorted(tuple(x) for x in env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0])
-        expect_eq(got, sorted([A.identity + (255, 5), B.identity + (9, 6)]), 'AutoAssign reply')
+        got, outcomes, result = auto_assign(env)
+        expect_eq(sorted(tuple(x) for x in got), sorted([A.identity + (255, 5), B.identity + (9, 6)]),
+                  'AutoAssign reply')
+        # the reply alone tells the bus is not like the map, and why
+        expect_eq({k: v[:3] for k, v in outcomes.items()},
+                  {A.serial: ('assigned', 255, 5), B.serial: ('assigned', 9, 6), C.serial: ('unchanged', 7, 7),
+                   H.serial: ('conflict', 255, 255), D.serial: ('unknown', 255, 255), ABSENT: ('missing', 0, 0)},
+                  'AutoAssign outcomes')
+        expect('node-ID 10 already answers' in outcomes[H.serial][3], 'conflict detail: %r' % (outcomes[H.serial],))
+        expect_eq(result, 'partial', 'AutoAssign result')
         unknown = c.wait_signal(lambda m: m.member == 'UnknownDevice' and m.body[3] == D.serial)
         expect(unknown, 'UnknownDevice for the unmapped non-configured device')
         fin = c.wait_signal(lambda m: m.member == 'JobFinished')
@@ -200,7 +208,7 @@ def test_mixed():
         with open(env.config_path, 'w') as f:
             f.write(env.config_text(cfg.replace('"ignore"', '"pool"')))
         env.call(MANAGER, MANAGER_IFACE, 'ReloadConfig')
-        got = [tuple(x) for x in env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0]]
+        got = [tuple(x) for x in auto_assign(env)[0]]
         expect_eq(got, [D.identity + (255, 20)], 'AutoAssign with the pool')
         expect_eq(env.get(dev('vcan0', D), DEVICE_IFACE, 'State'), 'assigned', 'State of the pooled device')
         expect_eq(env.get(dev('vcan0', H), DEVICE_IFACE, 'State'), 'conflict', 'State of the blocked device')
@@ -386,7 +394,7 @@ def test_bad_config():
                            what='the SIGHUP reload error of %s in the log' % name)
             expect_eq(env.get(p, DEVICE_IFACE, 'MappedNodeId'), 5, 'MappedNodeId after a bad %s reload' % name)
             expect_eq(env.get(MANAGER, MANAGER_IFACE, 'Buses'), [B0], 'Buses after a bad %s reload' % name)
-        expect_eq(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0], [], 'AutoAssign with the old map in force')
+        expect_eq(auto_assign(env)[0], [], 'AutoAssign with the old map in force')
         env.alive()
 
 

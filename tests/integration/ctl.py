@@ -30,7 +30,7 @@ LSSCTL = os.environ.get('LSSCTL_BINARY', 'lssctl')
 EXIT = {
     'ok': 0, 'failure': 1, 'usage': 2, 'not-running': 3, 'access-denied': 4, 'no-response': 5, 'rejected': 6,
     'busy': 7, 'bus-down': 8, 'bus-off': 9, 'not-found': 10, 'conflict': 11, 'cancelled': 12,
-    'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'interrupted': 130,
+    'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'partial': 16, 'interrupted': 130,
 }
 
 # the bus and map of the D-Bus tests (run.py), so both check the same devices
@@ -324,13 +324,35 @@ def test_auto_assign():
     with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
         ctl = Ctl(env)
         got = ctl.ok('auto-assign', '--json').json
-        expect_eq(got, [{'bus': 'vcan0', 'vendor': 0xEC, 'product': 0x1234, 'revision': 0x00010002,
-                         'serial': 0x1276, 'old_node_id': 255, 'new_node_id': 5}], 'auto-assign --json')
-        expect_eq(ctl.ok('auto-assign', '--json').json, [], 'second auto-assign')
+        expect_eq([x for x in got if x['outcome'] == 'assigned'],
+                  [{'bus': 'vcan0', 'vendor': 0xEC, 'product': 0x1234, 'revision': 0x00010002,
+                    'serial': 0x1276, 'old_node_id': 255, 'new_node_id': 5, 'outcome': 'assigned', 'detail': ''}],
+                  'auto-assign --json')
+        expect_eq(sorted((x['serial'], x['outcome']) for x in got),
+                  [(17, 'unchanged'), (0x1276, 'assigned'), (0x80002468, 'unchanged'), (0xFFFFFFFF, 'unknown')],
+                  'auto-assign --json: every device')
+        expect_eq([x for x in ctl.ok('auto-assign', '--json').json if x['outcome'] != 'unchanged' and
+                   x['outcome'] != 'unknown'], [], 'second auto-assign')
         out = ctl.ok('auto-assign', '--no-store').out
-        expect_eq(out.strip(), '0 node-IDs assigned.', 'auto-assign text')
+        expect_eq(out.strip().splitlines()[-1], '0 node-IDs assigned, 3 unchanged, 1 unknown.', 'auto-assign text')
         d = [x for x in ctl.ok('list', '--json').json if x['serial'] == 0x1276][0]
         expect_eq((d['node_id'], d['state']), (5, 'assigned'), 'after auto-assign')
+
+
+def test_auto_assign_partial():
+    # the map's 0x9A/3/17 is not on the bus: the bus does not match the map
+    with Env({'vcan0': SLAVES[:2]}, config=CONFIG % '') as env:
+        ctl = Ctl(env)
+        r = ctl('auto-assign')
+        expect_eq(r.rc, EXIT['partial'], 'exit status of a partial pass (%r)' % r.err)
+        expect(re.search(r'device 0x0000009a:0x00000003:0x00000000:0x00000011 missing', r.err),
+               'the missing device on stderr: %r' % r.err)
+        expect('does not match the map: 1 mapped device missing' in r.err, 'the verdict on stderr: %r' % r.err)
+        expect_eq(r.out.strip().splitlines()[-1], '1 node-ID assigned, 1 unchanged, 1 missing.', 'the count')
+        r = ctl('auto-assign', '--json')
+        expect_eq(r.rc, EXIT['partial'], 'exit status of a partial pass with --json')
+        expect_eq([(x['serial'], x['outcome']) for x in json.loads(r.out) if x['outcome'] == 'missing'],
+                  [(17, 'missing')], '--json names the missing device')
 
 
 def test_set_bitrate():
@@ -665,6 +687,7 @@ TESTS = {
     'scan-two-buses': test_scan_two_buses,
     'assign': test_assign,
     'auto-assign': test_auto_assign,
+    'auto-assign-partial': test_auto_assign_partial,
     'set-bitrate': test_set_bitrate,
     'reload': test_reload,
     'monitor': test_monitor,

@@ -68,6 +68,15 @@ def log(*args):
     print(*args, flush=True)
 
 
+def auto_assign(env, ifname='vcan0', options=(0,)):
+    """AutoAssign: (changes, outcomes, result). changes: [v, p, r, s, old,
+    new] of the devices that got a node-ID; outcomes: {serial: (outcome,
+    old, new, detail)} of every device the pass dealt with."""
+    outcomes, result = env.call(bus_path(ifname), BUS_IFACE, 'AutoAssign', 'a{sv}', *options)
+    changes = [list(o[:6]) for o in outcomes if o[6] in ('assigned', 'pool')]
+    return changes, {o[3]: (o[6], o[4], o[5], o[7]) for o in outcomes}, result
+
+
 class Slave:
     def __init__(self, vendor, product, revision, serial, node_id=0xFF, faults=()):
         self.vendor, self.product, self.revision, self.serial = vendor, product, revision, serial

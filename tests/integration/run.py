@@ -18,7 +18,7 @@ import xml.etree.ElementTree as ET
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import dbusmini  # noqa: E402
 from lssdtest import (ACCESS_DENIED, BUS_IFACE, DEVICE_IFACE, ERR, INVALID_ARGS, MANAGER, MANAGER_IFACE, ROOT,  # noqa: E402
-                      SERVICE, SOURCE_ROOT, Env, Skip, Slave, bus_path, device_path, log, run)
+                      SERVICE, SOURCE_ROOT, Env, Skip, Slave, auto_assign, bus_path, device_path, log, run)
 
 B0 = bus_path('vcan0')
 B1 = bus_path('vcan1')
@@ -291,8 +291,12 @@ def test_autoassign():
         lssd_signals(c)
         s = SLAVES[0]
         path = dev('vcan0', s)
-        got = env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0]
+        got, outcomes, result = auto_assign(env)
         expect_eq(got, [list(s.identity) + [255, 5]], 'AutoAssign reply')
+        # every device the pass dealt with, and whether the bus matches the map
+        expect_eq(outcomes, {0x1276: ('assigned', 255, 5, ''), 0x80002468: ('unchanged', 6, 6, ''),
+                             17: ('unchanged', 7, 7, ''), 0xFFFFFFFF: ('unknown', 255, 255, '')}, 'AutoAssign outcomes')
+        expect_eq(result, 'done', 'AutoAssign result')
         sig = c.wait_signal(lambda m: m.member == 'NodeIdAssigned')
         expect(sig and sig.body == [path, 255, 5], 'NodeIdAssigned: %r' % (sig and sig.body))
         unknown = c.wait_signal(lambda m: m.member == 'UnknownDevice')
@@ -313,8 +317,8 @@ def test_autoassign():
             expect(all_waiting(env, 'vcan0', SLAVES), 'slaves left in configuration')
 
         # idempotent: the second pass changes nothing, with or without the overrides
-        expect_eq(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0], [], 'second AutoAssign')
-        expect_eq(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 2, 'store', 'b', 'false', 'nmt_stop', 'b', 'true')[0],
+        expect_eq(auto_assign(env)[0], [], 'second AutoAssign')
+        expect_eq(auto_assign(env, options=(2, 'store', 'b', 'false', 'nmt_stop', 'b', 'true'))[0],
                   [], 'AutoAssign with options')
         expect(not c.wait_signal(lambda m: m.member == 'NodeIdAssigned', timeout=0.5), 'NodeIdAssigned again')
         expect_eq(env.get(path, DEVICE_IFACE, 'NodeId'), 5, 'NodeId after the second pass')
@@ -326,9 +330,12 @@ def test_autoassign_pool():
     slaves = [SLAVES[0], SLAVES[3]]
     pool = CONFIG.replace('product = 0x1234;', 'product = 0x1234;\n    unknown = "pool";\n    pool = [100, 101];')
     with Env({'vcan0': slaves}, config=pool % '') as env:
-        got = sorted(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0])
-        expect_eq(got, sorted([list(SLAVES[0].identity) + [255, 5], list(SLAVES[3].identity) + [255, 100]]),
+        got, outcomes, result = auto_assign(env)
+        expect_eq(sorted(got), sorted([list(SLAVES[0].identity) + [255, 5], list(SLAVES[3].identity) + [255, 100]]),
                   'AutoAssign reply with a pool')
+        # the mapped 0x9A/3/17 is not there: the reply says so, not only the journal
+        expect_eq(outcomes.get(17), ('missing', 0, 0, outcomes.get(17, ('',) * 4)[3]), 'outcome of the absent slave')
+        expect_eq(result, 'partial', 'AutoAssign result with a mapped device missing')
         expect_eq(env.get(dev('vcan0', SLAVES[3]), DEVICE_IFACE, 'NodeId'), 100, 'NodeId from the pool')
         # never seen, and the map has no revision: the object has the map's identity
         absent = device_path('vcan0', 0x9A, 3, 0, 17)
@@ -347,7 +354,7 @@ def test_autoassign_boot():
                        env.get(path, DEVICE_IFACE, 'NodeId') == 5, timeout=600,
                        what='NodeId 5 from the boot pass')
         expect_eq(env.get(path, DEVICE_IFACE, 'State'), 'assigned', 'State after the boot pass')
-        expect_eq(env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)[0], [], 'AutoAssign after the boot pass')
+        expect_eq(auto_assign(env)[0], [], 'AutoAssign after the boot pass')
         env.alive()
 
 
