@@ -184,7 +184,8 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                 else
                         ctl_table_add(t, NULL, "%u", f->new_id);
                 if (assignments)
-                        ctl_table_add(t, outcome_is_problem(f->outcome) ? CTL_ANSI_RED : NULL, "%s", f->outcome);
+                        ctl_table_add(t, outcome_is_problem(f->outcome) ? CTL_ANSI_RED : NULL, "%s%s%s", f->outcome,
+                                      f->detail[0] ? ", " : "", f->detail);
         }
         if (res->n > 0)
                 ctl_table_print(t, stdout, !c->no_legend, c->colors);

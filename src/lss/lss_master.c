@@ -329,7 +329,7 @@ static int proc_fastscan_top(lss_master *m) {
                         master_fail(m, LSS_E_CONFLICT, "the identity fastscan found could not be confirmed: "
                                     "several slaves answered Inquire Identity");
         } else if (m->fs.none)
-                master_fail(m, LSS_E_NOT_FOUND, "no non-configured slave answered the fastscan");
+                master_fail(m, LSS_E_NOT_FOUND, "no device: no non-configured slave answered the fastscan");
         else
                 master_fail(m, LSS_E_INCOMPLETE, "fastscan did not converge after %u attempts", m->fs.attempt);
         PT_END(&m->pc);
