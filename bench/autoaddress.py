@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
 """Auto-addressing on vcan: lssd AutoAssign vs python-canopen's fastscan loop.
 
-    autoaddress.py --impl lssd|canopen [--n 1,8,32] [--reps 5] [--modes mapped,vendor,serial,blind]
+    autoaddress.py --impl lssd|canopen [--n 1,8,32] [--reps 5] [--modes mapped,vendor,serial,blind,...]
 
 N non-configured lss-sim slaves (vendor 0x9A, product 3, random revision and
 serial from a fixed seed per N and repetition; latency 1 ms + 0..0.3 ms
@@ -32,7 +32,10 @@ MODES = {
     'vendor': 'vendor/product known (map: one absent device of that type; unknown = "pool")',
     'serial': 'map keyed by serial (vendor/product + serial, no revision)',
     'blind': 'blind (empty map, unknown = "pool")',
+    'vendor-canopennode': 'vendor/product known, CANopenNode v4 slaves (lss-sim profile canopennode)',
+    'blind-canopennode': 'blind, CANopenNode v4 slaves (lss-sim profile canopennode)',
 }
+PROFILE_SUFFIX = '-canopennode'  # the same pass on slaves that answer Fastscan in configuration state
 
 
 def lssd_config(mode, slaves):
@@ -60,11 +63,18 @@ def run_lssd(mode, n, rep, simulate=False):
     from lssdtest import Env, Slave
 
     slaves = bl.identities(n, bl.seed_of(n, rep))
-    conf, expected = lssd_config(mode, slaves)
+    sim_args = list(bl.SIM_ARGS)
+    base = mode
+    if mode.endswith(PROFILE_SUFFIX):
+        if simulate:
+            raise bl.BenchFailure('%s: lssd --simulate has no lss-sim profiles' % mode)
+        base = mode[:-len(PROFILE_SUFFIX)]
+        sim_args += ['--profile', PROFILE_SUFFIX[1:]]
+    conf, expected = lssd_config(base, slaves)
     os.environ.setdefault('LSSD_LOG_LEVEL', 'debug')  # one line per job: the engine's counters
     os.environ['LSSD_TEST_BACKEND'] = 'simulate' if simulate else 'vcan'
     who = 'lssd%s %s N=%d rep %d' % (' --simulate' if simulate else '', mode, n, rep)
-    with Env({IFNAME: [Slave(*s) for s in slaves]}, config=conf, candump=not simulate, sim_args=bl.SIM_ARGS) as env:
+    with Env({IFNAME: [Slave(*s) for s in slaves]}, config=conf, candump=not simulate, sim_args=sim_args) as env:
         try:
             return run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who)
         except bl.BenchFailure:
@@ -88,7 +98,8 @@ def run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who):
     elapsed = time.monotonic() - t0
     w1 = time.time()
     cpu = bl.proc_cpu_s(env.lssd.pid) - cpu0
-    got = {tuple(r[:4]): r[5] for r in reply}
+    # the reply lists every device the pass dealt with (the vendor mode's absent one too)
+    got = {tuple(r[:4]): r[5] for r in reply if r[6] in ('assigned', 'pool')}
     if expected is None:
         ids = sorted(got.values())
         if len(set(ids)) != len(ids) or any(not POOL[0] <= x <= POOL[1] for x in ids):
@@ -166,12 +177,15 @@ def main():
                     help='lssd-sim: lssd --simulate on the host (in-memory bus, no vcan, no VM)')
     ap.add_argument('--n', default=None, help='comma-separated slave counts (lssd: 1,8,32; canopen: 1,8)')
     ap.add_argument('--reps', type=int, default=None, help='repetitions per case (lssd: 5, canopen: 3)')
-    ap.add_argument('--modes', default='mapped,vendor,blind', help='lssd modes (default mapped,vendor,blind): '
+    ap.add_argument('--modes', default=None,
+                    help='lssd modes (default mapped,vendor,blind and, on vcan, the two -canopennode ones): '
                     + ','.join(MODES))
     a = ap.parse_args()
     lssd = a.impl != 'canopen'
     ns = [int(x) for x in (a.n or ('1,8,32' if lssd else '1,8')).split(',')]
     reps = a.reps or (5 if lssd else 3)
+    if a.modes is None:
+        a.modes = 'mapped,vendor,blind' + (',vendor-canopennode,blind-canopennode' if a.impl == 'lssd' else '')
     modes = a.modes.split(',') if lssd else ['canopen']
     for m in modes:
         if lssd and m not in MODES:

@@ -11,9 +11,10 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import benchlib as bl  # noqa: E402
 
-ORDER = ['mapped', 'vendor', 'serial', 'blind', 'canopen']  # modes
+ORDER = ['mapped', 'vendor', 'serial', 'blind', 'vendor-canopennode', 'blind-canopennode', 'canopen']  # modes
 LABEL = {'mapped': 'lssd, map (full identities)', 'vendor': 'lssd, vendor/product known',
          'serial': 'lssd, map keyed by serial', 'blind': 'lssd, blind (pool)',
+         'vendor-canopennode': 'lssd, vendor known, CANopenNode', 'blind-canopennode': 'lssd, blind, CANopenNode',
          'canopen': 'python-canopen fast_scan loop'}
 SPEEDUP_NAME = {'mapped': 'mapped', 'vendor': 'known-vendor', 'blind': 'blind'}
 
