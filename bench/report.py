@@ -147,6 +147,11 @@ def main():
     earlier = max(0, len(history) - len(failures))
     targets.append(('zero wrong results over all %d runs (+ failures.log)' % n_runs, not failures and not earlier,
                     '%d wrong in these runs, %d in earlier runs (failures.log)' % (len(failures), earlier)))
+    for key, what in (('encoder-mixed', 'VM'), ('encoder-mixed-hog', 'VM, a spinning process on every CPU')):
+        em = res.get(key)
+        if em:
+            targets.append(('encoder scenario on a mixed bus: every boot pass right (%s)' % what,
+                            em['right'] == len(em['runs']), '%d of %d right' % (em['right'], len(em['runs']))))
     fps = [res[k] for k in ('footprint-vcan', 'footprint-sim') if k in res]
     for fp in fps:
         if 'rss_after_scan_kib' in fp:

@@ -531,6 +531,11 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (r->status == LSS_OK)
                 memset(b->unstored, 0, sizeof(b->unstored));
 
+        const lss_master_stats *st = lss_master_get_stats(b->engine);
+        if (st->patient_wait_us)
+                log_notice("%s: AutoAssign: mapped devices were not found at first: looked for them again with "
+                           "waits of %u ms (the configured LSS timeout is %u ms)", b->ifname,
+                           st->patient_wait_us / 1000, b->config->lss_timeout_ms);
         out = lss_master_outcomes(b->engine, &n);
         for (size_t i = 0; i < n; i++) {
                 autoassign_publish_one(b, j, &out[i], now_realtime);

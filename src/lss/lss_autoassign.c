@@ -10,8 +10,16 @@
 #include "lss/lss_autoassign.h"
 #include "lss/lss_internal.h"
 
+/* The second look: waits this many times the configured timeout (or twice
+ * the slowest answer seen, when that is longer), up to a second. */
+#define PATIENT_FACTOR 4u
+#define PATIENT_MAX_US 1000000u
+
 typedef struct lss_aa_state {
-        int pc, i_pc;
+        int pc, i_pc, d_pc;
+        lss_timing_config timing;  /* the configured timing, kept during the second look */
+        bool patient;              /* the second look runs */
+        lss_outcome *first;        /* per map entry: its outcome before the second look (kind MISSING: none) */
         const lss_autoassign_plan *plan;
         bool *handled;          /* per map entry: seen on the bus */
         bool used[128];         /* node-IDs known to be taken */
@@ -46,6 +54,7 @@ void lss_autoassign_free_state(lss_master *m) {
         if (!m->aa)
                 return;
         free(m->aa->handled);
+        free(m->aa->first);
         free(m->aa->todo);
         free(m->aa->out);
         free(m->aa);
@@ -144,6 +153,9 @@ static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool 
         }
         if (lss_node_id_valid(r->node_id))
                 s->used[r->node_id] = true;
+        if (s->patient && r->status != LSS_E_NOT_FOUND && !o->message[0])
+                snprintf(o->message, sizeof(o->message), "found on a second look, with waits of %u ms",
+                         m->timing.cfg.timeout_us / 1000);
         /* the pass goes on: one device's trouble is its own outcome */
         m->result.status = LSS_OK;
         m->result.message[0] = 0;
@@ -228,6 +240,84 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
         PT_END(&s->i_pc);
 }
 
+/* Steps 1 and 2 for every map entry not seen yet: a full identity straight
+ * by selective switch, an entry without revision by bisecting the revision
+ * for its serial (finds configured devices too). */
+static int proc_map_direct(lss_master *m, lss_aa_state *s) {
+        PT_BEGIN(&s->d_pc);
+        /* 1. full identities: straight to them by selective switch */
+        for (s->i = 0; s->i < s->plan->n_map; s->i++) {
+                if (!s->plan->map[s->i].revision_known || s->handled[s->i])
+                        continue;
+                s->target = s->plan->map[s->i].node_id;
+                memset(&m->as, 0, sizeof(m->as));
+                m->as.id = s->plan->map[s->i].id;
+                m->as.node_id = s->target;
+                m->as.flags = assign_flags(s);
+                m->as.taken = s->plan->nmt_stop ? s->taken : NULL;
+                m->as.unstored = s->plan->unstored;
+                PT_CALL(&s->d_pc, proc_assign(m, &m->as));
+                if (m->result.status != LSS_E_NOT_FOUND) {
+                        s->handled[s->i] = true;
+                        s->changed = m->result.changed;
+                        record(m, s, &s->plan->map[s->i].id, false);
+                        if (s->changed && s->plan->nmt_stop) {
+                                /* the verifying reset took them out of Stopped */
+                                STEP_REQUEST(m, &s->d_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
+                        }
+                } else
+                        m->result.status = LSS_OK;
+        }
+
+        /* 2. no revision in the map: bisect the revision for that serial */
+        for (s->i = 0; s->i < s->plan->n_map; s->i++) {
+                if (s->plan->map[s->i].revision_known || s->handled[s->i])
+                        continue;
+                m->sc.range = (lss_identify_range) { s->plan->map[s->i].id.vendor, s->plan->map[s->i].id.product, 0,
+                                                     UINT32_MAX, s->plan->map[s->i].id.serial,
+                                                     s->plan->map[s->i].id.serial };
+                m->sc.pc = m->sc.vpc = 0;
+                PT_CALL(&s->d_pc, proc_slowscan(m, &m->sc));
+                m->result.status = LSS_OK;
+                if (todo_take(s, m->devices, m->n_devices) < 0)
+                        continue;
+                s->i_pc = 0;
+                PT_CALL(&s->d_pc, handle_found(m, s));
+        }
+
+        PT_END(&s->d_pc);
+}
+
+/* Map entries for the second look: not found, or silent halfway through
+ * their assignment (their outcome is kept in s->first until they answer). */
+static size_t second_look_entries(lss_aa_state *s) {
+        size_t n = 0;
+        for (size_t i = 0; i < s->plan->n_map; i++) {
+                s->first[i].kind = LSS_OUTCOME_MISSING;
+                for (size_t k = 0; s->handled[i] && k < s->n_out; k++) {
+                        lss_outcome *o = &s->out[k];
+                        if (o->kind == LSS_OUTCOME_FAILED && o->status == LSS_E_NO_RESPONSE &&
+                            lookup(s->plan, &o->id) == (int) i) {
+                                s->first[i] = *o;
+                                o->kind = LSS_OUTCOME_MISSING; /* looked for again */
+                                s->handled[i] = false;
+                        }
+                }
+                n += !s->handled[i];
+        }
+        return n;
+}
+
+/* The wait of the second look: the bus or the host was slower than the
+ * configured timeout allowed for, so well beyond it. */
+static uint32_t patient_wait(const lss_master *m, const lss_aa_state *s) {
+        uint64_t w = (uint64_t) s->timing.timeout_us * PATIENT_FACTOR;
+        uint64_t seen = 2ull * lss_timing_max(&m->timing);
+        if (seen > w)
+                w = seen;
+        return (uint32_t) (w < PATIENT_MAX_US ? w : PATIENT_MAX_US);
+}
+
 int proc_autoassign(lss_master *m) {
         lss_aa_state *s = m->aa;
         PT_BEGIN(&s->pc);
@@ -252,45 +342,7 @@ int proc_autoassign(lss_master *m) {
                 PT_YIELD(&s->pc);
         }
 
-        /* 1. full identities: straight to them by selective switch */
-        for (s->i = 0; s->i < s->plan->n_map; s->i++) {
-                if (!s->plan->map[s->i].revision_known)
-                        continue;
-                s->target = s->plan->map[s->i].node_id;
-                memset(&m->as, 0, sizeof(m->as));
-                m->as.id = s->plan->map[s->i].id;
-                m->as.node_id = s->target;
-                m->as.flags = assign_flags(s);
-                m->as.taken = s->plan->nmt_stop ? s->taken : NULL;
-                m->as.unstored = s->plan->unstored;
-                PT_CALL(&s->pc, proc_assign(m, &m->as));
-                if (m->result.status != LSS_E_NOT_FOUND) {
-                        s->handled[s->i] = true;
-                        s->changed = m->result.changed;
-                        record(m, s, &s->plan->map[s->i].id, false);
-                        if (s->changed && s->plan->nmt_stop) {
-                                /* the verifying reset took them out of Stopped */
-                                STEP_REQUEST(m, &s->pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
-                        }
-                } else
-                        m->result.status = LSS_OK;
-        }
-
-        /* 2. no revision in the map: bisect the revision for that serial */
-        for (s->i = 0; s->i < s->plan->n_map; s->i++) {
-                if (s->plan->map[s->i].revision_known || s->handled[s->i])
-                        continue;
-                m->sc.range = (lss_identify_range) { s->plan->map[s->i].id.vendor, s->plan->map[s->i].id.product, 0,
-                                                     UINT32_MAX, s->plan->map[s->i].id.serial,
-                                                     s->plan->map[s->i].id.serial };
-                m->sc.pc = m->sc.vpc = 0;
-                PT_CALL(&s->pc, proc_slowscan(m, &m->sc));
-                m->result.status = LSS_OK;
-                if (todo_take(s, m->devices, m->n_devices) < 0)
-                        continue;
-                s->i_pc = 0;
-                PT_CALL(&s->pc, handle_found(m, s));
-        }
+        PT_CALL(&s->pc, proc_map_direct(m, s));
 
         /* 3. non-configured devices left: fastscan with the map's vendor and
          * product bits first, then blind while somebody still answers */
@@ -337,13 +389,46 @@ int proc_autoassign(lss_master *m) {
                         s->pair--; /* the loop's ++ comes back to the blind enumeration */
         }
 
-        /* 4. what the map has and the bus has not */
+        /* 4. a present device must not be called missing because an answer
+         * came late (a loaded host, a slow device): what the map has and the
+         * pass did not find is looked for again with every step waiting
+         * several times longer, after another NMT Stop where asked */
+        if (second_look_entries(s) > 0) {
+                s->timing = m->timing.cfg;
+                m->stats.patient_wait_us = patient_wait(m, s);
+                m->timing.cfg.timeout_us = m->stats.patient_wait_us;
+                m->timing.cfg.guard_floor_us = m->stats.patient_wait_us / 4;
+                m->timing.cfg.adaptive = false;
+                s->patient = true;
+                if (s->plan->nmt_stop) {
+                        STEP_REQUEST(m, &s->pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
+                        m->step = (lss_step) { .kind = STEP_DELAY, .wait_us = 20000 };
+                        step_start(m);
+                        PT_YIELD(&s->pc);
+                }
+                s->d_pc = 0;
+                PT_CALL(&s->pc, proc_map_direct(m, s));
+                m->timing.cfg = s->timing;
+                s->patient = false;
+        }
+
+        /* 5. what the map has and the bus has not */
         for (size_t i = 0; i < s->plan->n_map; i++)
                 if (!s->handled[i]) {
-                        lss_outcome *o = outcome_add(s, &s->plan->map[i].id);
+                        lss_outcome *o = s->first[i].kind != LSS_OUTCOME_MISSING ?
+                                outcome_add(s, &s->first[i].id) : NULL;
+                        if (o) {
+                                /* silent again: the first look's failure stands */
+                                *o = s->first[i];
+                                continue;
+                        }
+                        o = outcome_add(s, &s->plan->map[i].id);
                         if (o) {
                                 o->kind = LSS_OUTCOME_MISSING;
                                 o->status = LSS_E_NOT_FOUND;
+                                if (m->stats.patient_wait_us)
+                                        snprintf(o->message, sizeof(o->message), "not found, also not when "
+                                                 "asked again with waits of %u ms", m->stats.patient_wait_us / 1000);
                         }
                 }
         STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
@@ -371,8 +456,10 @@ int lss_master_autoassign(lss_master *m, const lss_autoassign_plan *plan, uint64
         if (!m->aa)
                 return -ENOMEM;
         m->aa->plan = plan;
+        m->stats.patient_wait_us = 0;
         m->aa->handled = calloc(plan->n_map + 1, sizeof(bool));
-        if (!m->aa->handled) {
+        m->aa->first = calloc(plan->n_map + 1, sizeof(lss_outcome));
+        if (!m->aa->handled || !m->aa->first) {
                 lss_autoassign_free_state(m);
                 return -ENOMEM;
         }

@@ -102,6 +102,8 @@ typedef struct lss_master_stats {
         uint64_t steps, retries, timeouts, late_answers, ignored_frames, stale_frames, conflicts;
         uint32_t latency_min_us, latency_max_us; /* recent answer latency window */
         uint32_t timeout_us;                     /* the no-answer wait in force now */
+        uint32_t patient_wait_us;                /* AutoAssign looked again for mapped devices it had
+                                                    not found, with this wait (0: no second look) */
 } lss_master_stats;
 
 /* Progress callback (0..1) for the long operations; optional. */

@@ -18,7 +18,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from lssdtest import (BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, Env, Skip, Slave, auto_assign,  # noqa: E402
-                      bus_path, device_path, run, unit_exec_start)
+                      bus_path, device_path, log, run, unit_exec_start)
 
 B0 = bus_path('vcan0')
 CS_CONFIGURE_NODE_ID = 0x11
@@ -139,6 +139,44 @@ def test_encoder():
         expect_eq(configure_or_store(after), [], '0x11/0x17 frames in the second run')
         expect_eq(slave_ids(env, 'vcan0', ENCODERS), {s: (n, n) for s, n in ENCODER_MAP}, 'encoders after run 2')
         env.alive()
+
+
+# ---- the encoders beside other devices (issue 17: present devices reported missing) ----
+
+# a second lss-sim process on the same bus: two mapped non-configured
+# devices and one unknown, of the encoders' vendor and product
+OTHERS = [Slave(0xEC, 0x3A, 0x20, 0x00B10000 + i) for i in range(3)]
+ENCODER_MIXED_MAP = ENCODER_MAP + [(OTHERS[0].serial, 30), (OTHERS[1].serial, 31)]
+
+
+def encoder_mixed_pass(env_args=None):
+    """One boot pass of the mixed encoder bus at lssd's default timing;
+    returns {serial: (outcome, old, new, detail)} of its AutoAssign."""
+    cfg = config('vcan0', ENCODER_MIXED_MAP, vendor='0xEC', product='0x3A', auto_assign=True, nmt_stop=True)
+    cfg = cfg.replace('lss_timeout_ms = @TIMEOUT@;\n', '')  # the default timing, as installed
+    with Env({'vcan0': ENCODERS}, config=cfg, candump=True, notify=True, sim_args=['--profile', 'encoder'],
+             more_sims=[('vcan0', OTHERS, [])]) as env:
+        if not env.real:
+            raise Skip('two lss-sim processes on one bus')
+        ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=600, what='READY=1')
+        env.step('READY=1 with STATUS=%s' % ready.get('STATUS'))
+        want = dict(ENCODER_MIXED_MAP)
+        got = slave_ids(env, 'vcan0', ENCODERS + OTHERS)
+        wrong = {s: got[s] for s in want if got[s] != (want[s], want[s])}
+        expect(not wrong, 'devices without their mapped node-ID after the boot pass: %r (STATUS %s)' %
+               ({'%x' % s: v for s, v in wrong.items()}, ready.get('STATUS')))
+        expect_eq(got[OTHERS[2].serial], (255, 255), 'the unknown device')
+        status = ready.get('STATUS', '')
+        expect('8 assigned' in status and 'missing' not in status.replace('0 missing', ''),
+               'STATUS of the boot pass: %r' % status)
+        env.alive()
+
+
+def test_encoder_mixed():
+    reps = int(os.environ.get('LSSD_ENCODER_MIXED_REPS', '3'))
+    for rep in range(reps):
+        log('---- boot pass %d of %d ----' % (rep + 1, reps))
+        encoder_mixed_pass()
 
 
 # ---- a mixed bus ----
@@ -400,6 +438,7 @@ def test_bad_config():
 
 TESTS = {
     'encoder': test_encoder,
+    'encoder-mixed': test_encoder_mixed,
     'mixed': test_mixed,
     'notify-missing-interface': test_notify_missing_interface,
     'crash-restart': test_crash_restart,

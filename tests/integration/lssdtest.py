@@ -114,8 +114,11 @@ class Env:
     """One private bus, lss-sim per interface, one lssd."""
 
     def __init__(self, slaves=None, config=None, lssd_args=(), lssd_policy_override=False, candump=False,
-                 notify=False, sim_args=(), absent=(), start_lssd=True):
+                 notify=False, sim_args=(), absent=(), start_lssd=True, more_sims=()):
         self.slaves = slaves if slaves is not None else {'vcan0': []}
+        # (ifname, slaves, lss-sim arguments): another lss-sim process on a bus
+        # already served, e.g. devices of another kind beside the first ones
+        self.more_sims = list(more_sims)
         # interfaces the test creates later: no check, no lss-sim at start
         self.absent = set(absent)
         self.want_lssd = start_lssd
@@ -176,6 +179,8 @@ class Env:
             for ifname, slaves in self.slaves.items():
                 if ifname not in self.absent:
                     self._start_sim(ifname, slaves)
+            for i, (ifname, slaves, args) in enumerate(self.more_sims):
+                self._start_sim(ifname, slaves, key='%s+%d' % (ifname, i + 1), args=args)
         if self.want_lssd:
             self._start_lssd()
             self.step('lssd ready')
@@ -221,19 +226,21 @@ class Env:
         self.procs.append(p)
         time.sleep(0.3)  # candump has no "ready"
 
-    def _start_sim(self, ifname, slaves):
-        state = os.path.join(self.dir, 'state-' + ifname)
+    def _start_sim(self, ifname, slaves, key=None, args=None):
+        key = key or ifname
+        state = os.path.join(self.dir, 'state-' + key)
         os.mkdir(state)
-        self.state_dirs[ifname] = state
-        cmd = [os.environ.get('LSS_SIM_BINARY', 'lss-sim'), ifname, '--state', state] + self.sim_args
+        self.state_dirs[key] = state
+        cmd = [os.environ.get('LSS_SIM_BINARY', 'lss-sim'), ifname, '--state', state] + \
+            (self.sim_args if args is None else list(args))
         for s in slaves:
             cmd += ['--slave', s.spec()]
             for fault in s.faults:
                 cmd += ['--fault', '%s@0x%x' % (fault, s.serial)]
-        logf = open(os.path.join(self.dir, 'lss-sim-%s.log' % ifname), 'w')
+        logf = open(os.path.join(self.dir, 'lss-sim-%s.log' % key), 'w')
         p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=logf, text=True)
         self.procs.append(p)
-        self.sims[ifname] = p
+        self.sims[key] = p
         for line in p.stdout:
             if line.strip() == 'ready':
                 break
@@ -452,7 +459,11 @@ class Env:
         return [f for f in self.frames(ifname) if f[1] in (0x7E4, 0x7E5)]
 
     def slave_state(self, ifname, serial):
-        text = self.read(os.path.join(self.state_dirs[ifname], '%08x.state' % serial))
+        name = '%08x.state' % serial
+        dirs = [d for k, d in self.state_dirs.items() if k == ifname or k.startswith(ifname + '+')]
+        path = next((os.path.join(d, name) for d in dirs if os.path.exists(os.path.join(d, name))),
+                    os.path.join(self.state_dirs[ifname], name))
+        text = self.read(path)
         return dict(line.split('=', 1) for line in text.splitlines() if '=' in line and not line.startswith('#'))
 
     def wait_until(self, pred, timeout=10, what='condition'):

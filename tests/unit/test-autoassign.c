@@ -66,6 +66,46 @@ START_TEST(encoders_at_node_1) {
 }
 END_TEST
 
+/* A present device is never called missing because its answers come late
+ * (a loaded host): the encoders of the manual, one answering 30 ms after
+ * each request, beyond the 20 ms wait and its late guard. The pass looks
+ * again for what it did not find, with waits of 4 x 20 ms, after NMT Stop
+ * again; a device that is not there stays missing, saying so. */
+START_TEST(late_device_is_not_missing) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(1000, 300);
+        f.needs_nmt_stopped = true;
+        lss_map_entry map[5];
+        for (unsigned i = 0; i < 5; i++) {
+                lss_identity id = { 0xEC, 0x1234, 0x00010002, 0x2000 + i };
+                if (i < 4)
+                        membus_add_slave(b, &id, 1, &f);
+                map[i] = (lss_map_entry) { .id = id, .revision_known = i == 3, .node_id = (uint8_t) (10 + i) };
+        }
+        membus_slave(b, 1)->faults.latency_us = 30000; /* found by identify, late */
+        membus_slave(b, 3)->faults.latency_us = 30000; /* full identity, late */
+        lss_autoassign_plan p = { .map = map, .n_map = 5, .store = true, .nmt_stop = true };
+        lss_master *m = master_default();
+        const lss_result *r = run_pass(m, b, &p);
+        ck_assert_int_eq(r->status, LSS_OK);
+        for (unsigned i = 0; i < 4; i++) {
+                const lss_outcome *o = outcome_of(m, &map[i].id);
+                ck_assert_msg(o && o->kind == LSS_OUTCOME_ASSIGNED, "device %u: %s %s", i,
+                              o ? lss_outcome_name(o->kind) : "-", o ? o->message : "");
+                ck_assert_uint_eq(membus_slave(b, i)->st.stored_node_id, 10 + i);
+                if (i == 1 || i == 3)
+                        ck_assert_msg(strstr(o->message, "second look"), "%s", o->message);
+        }
+        const lss_outcome *o = outcome_of(m, &map[4].id);
+        ck_assert_int_eq(o->kind, LSS_OUTCOME_MISSING);
+        ck_assert_msg(strstr(o->message, "waits of 80 ms"), "%s", o->message);
+        ck_assert_uint_eq(lss_master_get_stats(m)->patient_wait_us, 80000);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 static const lss_identity A = { 0x9A, 3, 1, 17 };    /* mapped, non-configured, full identity */
 static const lss_identity B = { 0x9A, 3, 2, 18 };    /* mapped (no revision), configured wrong */
 static const lss_identity C = { 0x9A, 3, 1, 19 };    /* mapped, already right */
@@ -269,6 +309,7 @@ int main(void) {
         TCase *tc = tcase_create("autoassign");
         tcase_set_timeout(tc, 120);
         tcase_add_test(tc, encoders_at_node_1);
+        tcase_add_test(tc, late_device_is_not_missing);
         tcase_add_test(tc, mixed_bus_ignore);
         tcase_add_test(tc, mixed_bus_pool);
         tcase_add_test(tc, late_confirmation_is_not_lost);
