@@ -17,18 +17,12 @@ Needs root and vcan0: run it through bench/run (which uses tests/vm/run)."""
 
 import argparse
 import os
-import subprocess
 import sys
 import time
 import traceback
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import benchlib as bl  # noqa: E402
-
-
-def hogs():
-    """One busy process per CPU."""
-    return [subprocess.Popen([sys.executable, '-c', 'while True: pass']) for _ in range(os.cpu_count() or 1)]
 
 
 def main():
@@ -39,9 +33,9 @@ def main():
     if not os.path.exists('/sys/class/net/vcan0'):
         bl.log('vcan0 is not there: run through bench/run (tests/vm/run)')
         return 2
-    from autoassign import encoder_mixed_pass
+    from autoassign import cpu_hogs, encoder_mixed_pass
 
-    load = hogs() if a.hog else []
+    load = cpu_hogs() if a.hog else []
     right, runs = 0, []
     try:
         for i in range(a.runs):

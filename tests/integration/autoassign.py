@@ -172,11 +172,23 @@ def encoder_mixed_pass(env_args=None):
         env.alive()
 
 
+def cpu_hogs():
+    """A spinning process on every CPU: a loaded host."""
+    return [subprocess.Popen([sys.executable, '-c', 'while True: pass']) for _ in range(os.cpu_count() or 1)]
+
+
 def test_encoder_mixed():
-    reps = int(os.environ.get('LSSD_ENCODER_MIXED_REPS', '3'))
-    for rep in range(reps):
-        log('---- boot pass %d of %d ----' % (rep + 1, reps))
-        encoder_mixed_pass()
+    reps = int(os.environ.get('LSSD_ENCODER_MIXED_REPS', '2'))
+    for hog in (False, True):
+        hogs = cpu_hogs() if hog else []
+        try:
+            for rep in range(reps):
+                log('---- boot pass %d of %d%s ----' % (rep + 1, reps, ', CPU hog' if hog else ''))
+                encoder_mixed_pass()
+        finally:
+            for p in hogs:
+                p.kill()
+                p.wait()
 
 
 # ---- a mixed bus ----
