@@ -270,6 +270,8 @@ class Env:
             env['NOTIFY_SOCKET'] = self.notify_path
         self.lssd_log_path = os.path.join(self.dir, 'lssd.log')
         self.lssd_log = open(self.lssd_log_path, 'a')
+        # how it was started, for tests that start another one the same way
+        self.lssd_cmd, self.lssd_env = cmd, env
         self.lssd = subprocess.Popen(cmd, env=env, stdout=self.lssd_log, stderr=subprocess.STDOUT)
         self.procs.append(self.lssd)
         self.wait_for_name()
