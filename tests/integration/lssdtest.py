@@ -105,11 +105,13 @@ class Env:
     """One private bus, lss-sim per interface, one lssd."""
 
     def __init__(self, slaves=None, config=None, lssd_args=(), lssd_policy_override=False, candump=False,
-                 notify=False, sim_args=(), absent=(), start_lssd=True):
+                 notify=False, sim_args=(), absent=(), start_lssd=True, lssd_prefix=()):
         self.slaves = slaves if slaves is not None else {'vcan0': []}
         # interfaces the test creates later: no check, no lss-sim at start
         self.absent = set(absent)
         self.want_lssd = start_lssd
+        # a command lssd runs under, e.g. setpriv dropping a capability
+        self.lssd_prefix = list(lssd_prefix)
         self.config = config
         self.lssd_args = list(lssd_args)
         self.override = lssd_policy_override
@@ -241,7 +243,7 @@ class Env:
         self._start_sim(ifname, slaves)
 
     def _start_lssd(self):
-        cmd = os.environ.get('LSSD_TEST_WRAPPER', '').split()
+        cmd = self.lssd_prefix + os.environ.get('LSSD_TEST_WRAPPER', '').split()
         if self.config is not None:
             self.config_path = os.path.join(self.dir, 'lssd.conf')
             with open(self.config_path, 'w') as f:
