@@ -236,6 +236,36 @@ out:
         return r;
 }
 
+int rtnl_check_can_bitrate(const can_sys *sys, const char *ifname, rtnl_link *ret) {
+        rtnl_link link;
+        void *buf;
+        int r;
+
+        if (!sys)
+                sys = can_sys_default();
+        r = rtnl_get_link(sys, ifname, &link);
+        if (r < 0)
+                return r;
+        if (ret)
+                *ret = link;
+        if (strcmp(link.kind, "can") != 0)
+                return -EOPNOTSUPP;
+        if (!(link.flags & IFF_UP) || link.bitrate == 0)
+                return -ENETDOWN;
+
+        buf = malloc(NL_BUFFER_SIZE);
+        if (!buf)
+                return -ENOMEM;
+        /* The rate it runs at: the kernel checks CAP_NET_ADMIN first (EPERM),
+         * then refuses bit timing on a running controller (EBUSY) — a
+         * change that is allowed and leaves the controller untouched. */
+        r = rtnl_build_set_can_bitrate(buf, NL_BUFFER_SIZE, 1, link.ifindex, link.bitrate);
+        if (r >= 0)
+                r = nl_request(sys, buf, (size_t) r, NULL, NULL);
+        free(buf);
+        return r == -EBUSY ? 0 : r;
+}
+
 int rtnl_watch_new(const can_sys *sys, rtnl_link_cb cb, void *userdata, rtnl_watch **ret) {
         rtnl_watch *w;
 

@@ -75,3 +75,11 @@ int rtnl_get_link(const can_sys *sys, const char *ifname, rtnl_link *ret);
  * kind is "can" (vcan has no bit rate), -ENODEV if there is no such link,
  * -EPERM without CAP_NET_ADMIN, -EINVAL for a rate the controller refuses. */
 int rtnl_set_can_bitrate(const can_sys *sys, const char *ifname, uint32_t bitrate);
+/* Whether rtnl_set_can_bitrate() would be allowed on this running
+ * controller, found out without changing anything: a bit-timing change to
+ * the rate it runs at, which the kernel checks for CAP_NET_ADMIN and then
+ * refuses because the controller runs. 0: allowed; -EPERM (or -EACCES)
+ * without CAP_NET_ADMIN; -EOPNOTSUPP unless the link's kind is "can";
+ * -ENETDOWN when it is not up; -ENODEV when there is no such link. `ret`
+ * (may be NULL) gets the link as the kernel reported it. */
+int rtnl_check_can_bitrate(const can_sys *sys, const char *ifname, rtnl_link *ret);

@@ -264,8 +264,15 @@ static int run(int argc, char *argv[]) {
         if (r < 0)
                 goto finish;
 
-        /* bus: objects first, buses and their objects, then the name */
+        /* bus: the manager's objects and the name before any CAN bus is
+         * opened, so that a second lssd exits before it sends a frame (its
+         * switch to waiting would cut into the running one's job). No call
+         * is dispatched before the event loop runs, so the bus objects added
+         * below are there for the first caller. */
         r = lssd_context_connect_bus(ctx);
+        if (r < 0)
+                goto finish;
+        r = lssd_context_request_name(ctx);
         if (r < 0)
                 goto finish;
         r = lssd_context_open_rtnl(ctx);
@@ -278,9 +285,6 @@ static int run(int argc, char *argv[]) {
                 goto finish;
         }
         (void) lssd_context_dump_links(ctx);
-        r = lssd_context_request_name(ctx);
-        if (r < 0)
-                goto finish;
 
         lssd_context_notify_ready(ctx);
         log_info("Ready: serving %zu bus%s", ctx->n_buses, ctx->n_buses == 1 ? "" : "es");

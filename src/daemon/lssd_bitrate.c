@@ -8,6 +8,7 @@
 #include "can/rtnl_watch.h"
 #include "daemon/lssd_auth.h"
 #include "daemon/lssd_bitrate.h"
+#include "daemon/lssd_bitrate_host.h"
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_jobs.h"
 #include "daemon/lssd_log.h"
@@ -242,6 +243,10 @@ static int finish(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 }
                 return 0;
         }
+        /* the host did not follow: that, not a conflict, is the cause */
+        if (r->status == LSS_E_INCOMPLETE && (rt == LSS_RETUNE_FAILED || rt == LSS_RETUNE_TIMEOUT))
+                return fail(b, j, lssd_bitrate_retune_error(rt == LSS_RETUNE_FAILED ? j->retune_error : ETIMEDOUT),
+                            "partial", "%s; %s", r->message, host);
         if (r->status == LSS_E_INCOMPLETE)
                 return fail(b, j, LSSD_ERROR_CONFLICT, "partial", "%s; %s", r->message, host);
         if (r->status == LSS_E_REJECTED && rt != LSS_RETUNE_NONE)
@@ -258,6 +263,10 @@ int lssd_bitrate_run(lssd_bus *b, lssd_job *j, const lss_result *r) {
         int k;
 
         if (!r) {
+                /* whether the host can follow, before the first frame */
+                lssd_bitrate_refusal no;
+                if (lssd_bitrate_check_host(b, j->bitrate, &no) < 0)
+                        return fail(b, j, no.error, no.result, "%s", no.text);
                 j->n_stages = (unsigned) j->n_pairs + 2;
                 log_info("%s: SetBitrate %u -> %u bit/s, switch delay %u ms%s: scanning", b->ifname,
                          lssd_bus_bitrate(b), j->bitrate, j->switch_delay_ms, j->bitrate_store ? ", store" : "");

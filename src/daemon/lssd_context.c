@@ -294,8 +294,32 @@ int lssd_context_connect_bus(lssd_context *ctx) {
         return 0;
 }
 
+/* The PID of the process that owns `name`, 0 when it cannot be told. */
+static pid_t name_owner_pid(sd_bus *bus, const char *name) {
+        sd_bus_creds *creds = NULL;
+        pid_t pid = 0;
+
+        if (sd_bus_get_name_creds(bus, name, SD_BUS_CREDS_PID, &creds) >= 0)
+                (void) sd_bus_creds_get_pid(creds, &pid);
+        sd_bus_creds_unref(creds);
+        return pid;
+}
+
 int lssd_context_request_name(lssd_context *ctx) {
         int r = sd_bus_request_name(ctx->bus, LSSD_BUS_NAME, 0);
+        if (r == -EEXIST) {
+                pid_t pid = name_owner_pid(ctx->bus, LSSD_BUS_NAME);
+                if (pid > 0)
+                        log_error("lssd is already running (PID %d owns %s): exiting without touching any bus",
+                                  (int) pid, LSSD_BUS_NAME);
+                else
+                        log_error("lssd is already running (%s has an owner): exiting without touching any bus",
+                                  LSSD_BUS_NAME);
+                return r;
+        }
+        if (r == -EACCES || r == -EPERM)
+                return log_error_errno(r, "Not allowed to own %s (the D-Bus policy lets only user lssd and root "
+                                       "own it)", LSSD_BUS_NAME);
         if (r < 0)
                 return log_error_errno(r, "Failed to own the name %s", LSSD_BUS_NAME);
         return 0;

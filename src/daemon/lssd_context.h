@@ -81,6 +81,8 @@ int lssd_context_open_rtnl(lssd_context *ctx);
 /* Feeds the current state of every link to the buses. */
 int lssd_context_dump_links(lssd_context *ctx);
 int lssd_context_connect_bus(lssd_context *ctx);
+/* Owns org.lssd.LSS1; call before any CAN bus is opened. -EEXIST (logged
+ * as "lssd is already running") when another process owns it. */
 int lssd_context_request_name(lssd_context *ctx);
 
 lssd_bus *lssd_context_find_bus(lssd_context *ctx, const char *ifname);

@@ -19,6 +19,9 @@
 #define LSSD_ERROR_CANCELLED       LSSD_ERROR_PREFIX "Cancelled"
 #define LSSD_ERROR_NOT_SUPPORTED   LSSD_ERROR_PREFIX "NotSupported"
 #define LSSD_ERROR_LIMITS_EXCEEDED LSSD_ERROR_PREFIX "LimitsExceeded"
+/* lssd itself lacks a privilege (CAP_NET_ADMIN to retune an interface);
+ * not the caller's AccessDenied */
+#define LSSD_ERROR_PERMISSION_DENIED LSSD_ERROR_PREFIX "PermissionDenied"
 
 /* ReloadConfig() with a bad file (the standard D-Bus name, as dbus-daemon uses it). */
 #define LSSD_ERROR_INVALID_FILE_CONTENT "org.freedesktop.DBus.Error.InvalidFileContent"

@@ -11,6 +11,9 @@ rate. `bitrate.py NAME`:
   sim      lssd --simulate (the host retune is the simulated controller's):
            the success chain only (lss-sim faults need SocketCAN)
 
+  kvaser-no-cap  lssd on can0 without CAP_NET_ADMIN (setpriv): refused
+           before the first frame with PermissionDenied, also through lssctl
+
 Scenarios: 125k -> 250k -> 500k (the last with store), the seed example
 `13 00 02` / `15 10 00` byte for byte on the wire; a device refusing 100k
 (transmitter profile, index 5); a device missing the activation (partial
@@ -19,8 +22,10 @@ switch reported, the others verified); Configure Bit Timing ignored
 
 import json
 import os
+import re
 import subprocess
 import sys
+import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from lssdtest import BUS_IFACE, ERR, Env, Skip, Slave, bus_path, log, run  # noqa: E402
@@ -80,7 +85,7 @@ class Backend:
         self.sim_if = 'can1' if kind == 'kvaser' else 'vcan0'
         self.path = bus_path(self.lssd_if)
 
-    def env(self, slaves, profile=None, devices=''):
+    def env(self, slaves, profile=None, devices='', lssd_prefix=()):
         backend = self
 
         class BitrateEnv(Env):
@@ -103,7 +108,7 @@ class Backend:
             for i in ('can0', 'can1'):
                 set_link_rate(i, 125000)
         return BitrateEnv({self.lssd_if: slaves}, config=CONFIG % {'ifname': self.lssd_if, 'devices': devices}, candump=True,
-                          sim_args=sim_args)
+                          sim_args=sim_args, lssd_prefix=lssd_prefix)
 
     def done(self):
         if self.kind == 'kvaser':
@@ -254,6 +259,47 @@ def scenario_silent(b):
         env.alive()
 
 
+# lssd.service without the lssd-bitrate.conf drop-in: no CAP_NET_ADMIN
+NO_NET_ADMIN = ['setpriv', '--inh-caps=-net_admin', '--bounding-set=-net_admin']
+
+
+def scenario_no_cap(b):
+    """The host cannot retune can0 (issue 17): refused before the first frame,
+    with the cause named; no device switched, can0 stays."""
+    with b.env(GENERIC, devices=MAPPED, lssd_prefix=NO_NET_ADMIN) as env:
+        cap = re.search(r'^CapEff:\s*([0-9a-f]+)$', env.read('/proc/%d/status' % env.lssd.pid), re.M)
+        expect(cap and not int(cap.group(1), 16) & (1 << 12), 'lssd runs without CAP_NET_ADMIN: %r' % cap)
+        # the start's switch to waiting is on the wire before we count
+        env.wait_until(lambda: b.lss(env), what='the switch to waiting at start in candump')
+        time.sleep(0.5)
+        before = len(b.lss(env))
+        r = b.set_bitrate(env, 250000, store=True)
+        lssctl = os.environ.get('LSSCTL_BINARY')
+        p = None
+        if lssctl:
+            p = subprocess.run([lssctl, 'set-bitrate', '250k', '--bus', 'can0'], capture_output=True, text=True,
+                               env=dict(os.environ, DBUS_SYSTEM_BUS_ADDRESS=env.address), timeout=300)
+        # the witnesses first: the wire and the devices
+        time.sleep(0.5)  # candump writes what it saw
+        sent = b.lss(env)[before:]
+        expect_eq([f for f in sent if f[1] == 0x7E5 and f[2][0] == 0x13], [], 'Configure Bit Timing on the wire')
+        expect_eq(sent, [], 'LSS frames on the wire for the refused changes')
+        for s in GENERIC:
+            expect_eq(b.slave_index(env, s), INDEX[125000], 'bit timing index of %x' % s.serial)
+            expect_eq(b.slave_index(env, s, 'stored_bit_timing_index'), INDEX[125000], 'stored index')
+        check_rate(b, env, 125000)
+        # then what the callers were told
+        expect_eq(r.error_name, ERR + 'PermissionDenied', 'SetBitrate without CAP_NET_ADMIN: %r' % r)
+        msg = r.error_message or ''
+        expect('CAP_NET_ADMIN' in msg and 'can0' in msg and 'nothing sent' in msg, 'message: ' + msg)
+        if p:
+            expect_eq(p.returncode, 16, 'lssctl exit status (%r)' % p.stderr)
+            expect('lssd itself is not permitted' in p.stderr and 'CAP_NET_ADMIN' in p.stderr,
+                   'lssctl message: %r' % p.stderr)
+            expect('conflict' not in p.stderr, 'lssctl message: %r' % p.stderr)
+        env.alive()
+
+
 def scenario_arguments(b):
     with b.env(GENERIC[:1]) as env:
         for args, want, text in [((250000, 5), 'org.freedesktop.DBus.Error.InvalidArgs', 'switch_delay_ms 5'),
@@ -283,6 +329,16 @@ def all_scenarios(kind, needs_real=True):
     return t
 
 
+def no_cap():
+    if os.environ.get('LSSD_TEST_BACKEND') == 'simulate':
+        raise Skip('needs SocketCAN')
+    b = Backend('kvaser')
+    try:
+        scenario_no_cap(b)
+    finally:
+        b.done()
+
+
 def sim_only():
     if os.environ.get('LSSD_TEST_BACKEND') != 'simulate':
         raise Skip('the simulated backend only (suite integration-sim)')
@@ -294,5 +350,7 @@ if __name__ == '__main__':
     sys.exit(run({
         'vcan': all_scenarios('vcan'),
         'kvaser': all_scenarios('kvaser'),
+        # vcan and the simulated bus have no bit timing to set
+        'kvaser-no-cap': no_cap,
         'sim': sim_only,
     }))

@@ -30,7 +30,7 @@ LSSCTL = os.environ.get('LSSCTL_BINARY', 'lssctl')
 EXIT = {
     'ok': 0, 'failure': 1, 'usage': 2, 'not-running': 3, 'access-denied': 4, 'no-response': 5, 'rejected': 6,
     'busy': 7, 'bus-down': 8, 'bus-off': 9, 'not-found': 10, 'conflict': 11, 'cancelled': 12,
-    'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'partial': 16, 'interrupted': 130,
+    'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'permission-denied': 16, 'partial': 17, 'interrupted': 130,
 }
 
 # the bus and map of the D-Bus tests (run.py), so both check the same devices
@@ -366,7 +366,7 @@ def test_set_bitrate():
         ctl.fails('usage', "Invalid --delay", 'set-bitrate', '250k', '--delay', '70000')
         ctl.fails('usage', 'does not go with', 'set-bitrate', '250k', '--no-verify')
         ctl.fails('usage', 'say which one with --bus', 'set-bitrate', '250k')
-        ctl.fails('not-supported', 'lssd does not support this', 'set-bitrate', '250k', '--bus', 'vcan1')
+        ctl.fails('not-supported', 'not supported by lssd, its configuration', 'set-bitrate', '250k', '--bus', 'vcan1')
         ctl.fails('not-found', 'no such device or bus', 'set-bitrate', '250k', '--bus', 'vcan0', '--delay', '20')
         expect_eq(env.get(B0, BUS_IFACE, 'Bitrate'), 125000, 'Bitrate after a refused change')
         ctl.ok('set-bitrate', '250k', '--bus', 'vcan0', '--delay', '20', '--skip-missing', '--no-store')

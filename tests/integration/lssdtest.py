@@ -114,7 +114,7 @@ class Env:
     """One private bus, lss-sim per interface, one lssd."""
 
     def __init__(self, slaves=None, config=None, lssd_args=(), lssd_policy_override=False, candump=False,
-                 notify=False, sim_args=(), absent=(), start_lssd=True, more_sims=()):
+                 notify=False, sim_args=(), absent=(), start_lssd=True, more_sims=(), lssd_prefix=()):
         self.slaves = slaves if slaves is not None else {'vcan0': []}
         # (ifname, slaves, lss-sim arguments): another lss-sim process on a bus
         # already served, e.g. devices of another kind beside the first ones
@@ -122,6 +122,8 @@ class Env:
         # interfaces the test creates later: no check, no lss-sim at start
         self.absent = set(absent)
         self.want_lssd = start_lssd
+        # a command lssd runs under, e.g. setpriv dropping a capability
+        self.lssd_prefix = list(lssd_prefix)
         self.config = config
         self.lssd_args = list(lssd_args)
         self.override = lssd_policy_override
@@ -257,7 +259,7 @@ class Env:
         self._start_sim(ifname, slaves)
 
     def _start_lssd(self):
-        cmd = os.environ.get('LSSD_TEST_WRAPPER', '').split()
+        cmd = self.lssd_prefix + os.environ.get('LSSD_TEST_WRAPPER', '').split()
         if self.config is not None:
             self.config_path = os.path.join(self.dir, 'lssd.conf')
             with open(self.config_path, 'w') as f:
@@ -286,6 +288,8 @@ class Env:
             env['NOTIFY_SOCKET'] = self.notify_path
         self.lssd_log_path = os.path.join(self.dir, 'lssd.log')
         self.lssd_log = open(self.lssd_log_path, 'a')
+        # how it was started, for tests that start another one the same way
+        self.lssd_cmd, self.lssd_env = cmd, env
         self.lssd = subprocess.Popen(cmd, env=env, stdout=self.lssd_log, stderr=subprocess.STDOUT)
         self.procs.append(self.lssd)
         self.wait_for_name()

@@ -781,6 +781,31 @@ def test_lifecycle():
         expect('Stopped' in env.lssd_output(), 'log of the stop')
 
 
+def test_second_instance():
+    """A second lssd for a bus already served (issue 17): it must not send a
+    frame (its switch to waiting would cut into the first one's work), must
+    say that lssd is already running and exit 1; the first one serves on."""
+    slaves = [Slave(0x9A, 3, 1, 0x1000 + i) for i in range(3)]
+    with Env({'vcan0': slaves}, candump=True) as env:
+        env.wait_until(lambda: env.get(B0, BUS_IFACE, 'State') == 'idle', what='the first lssd idle')
+        time.sleep(0.5)
+        before = len(env.frames('vcan0')) if env.real else 0
+        p = subprocess.run(env.lssd_cmd, env=env.lssd_env, capture_output=True, text=True, timeout=120)
+        env.step('second lssd exited with %d: %r' % (p.returncode, p.stdout + p.stderr))
+        out = p.stdout + p.stderr
+        if env.real:  # the witness first
+            time.sleep(0.5)  # candump writes what it saw
+            expect_eq(env.frames('vcan0')[before:], [], 'frames on vcan0 while the second lssd ran')
+        expect_eq(p.returncode, 1, 'exit status of the second lssd')
+        expect('lssd is already running' in out, 'message of the second lssd: %r' % out)
+        expect('serving' not in out, 'the second lssd opened a bus: %r' % out)
+        # the first one serves on
+        env.alive()
+        got = env.call(B0, BUS_IFACE, 'Execute', 'a(sv)', 2, 'SwitchModeSelective', '(uuuu)', *slaves[0].identity,
+                       'InquireNodeId', 'b', 'true')
+        expect_eq([v['data'] for v in got[0]], [True, 0xFF], 'the first lssd still reaches a slave')
+
+
 def test_reload():
     with Env({'vcan0': SLAVES, 'vcan1': []}, config=CONFIG % '') as env:
         c = env.connect()
@@ -862,6 +887,7 @@ TESTS = {
     'concurrent-clients': test_concurrent_clients,
     'two-buses': test_two_buses,
     'lifecycle': test_lifecycle,
+    'second-instance': test_second_instance,
     'reload': test_reload,
     'bus-down': test_bus_down,
 }

@@ -958,6 +958,40 @@ START_TEST(fake_set_can_bitrate) {
 }
 END_TEST
 
+/* SetBitrate's check before anything is sent: allowed or not, nothing changes */
+START_TEST(fake_check_can_bitrate) {
+        rtnl_link link;
+
+        nf_reset();
+        nf_standard_links();
+
+        /* allowed: the kernel refused to touch the running controller (EBUSY) */
+        ck_assert_int_eq(rtnl_check_can_bitrate(&nf_sys, "can0", &link), 0);
+        ck_assert_str_eq(NF.ops, "busy ");
+        ck_assert_str_eq(link.kind, "can");
+        ck_assert_uint_eq(link.bitrate, 125000);
+        ck_assert_uint_eq(nf_find(4, NULL)->bitrate, 125000);
+        ck_assert(nf_find(4, NULL)->flags & IFF_UP);
+
+        /* no CAP_NET_ADMIN */
+        NF.ops[0] = 0;
+        NF.fail_newlink_with = -EPERM;
+        ck_assert_int_eq(rtnl_check_can_bitrate(&nf_sys, "can0", NULL), -EPERM);
+        NF.fail_newlink_with = 0;
+
+        /* nothing asked of links that have no bit timing, are down or absent */
+        unsigned req = NF.n_requests;
+        ck_assert_int_eq(rtnl_check_can_bitrate(&nf_sys, "vcan0", &link), -EOPNOTSUPP);
+        ck_assert_str_eq(link.kind, "vcan");
+        ck_assert_int_eq(rtnl_check_can_bitrate(&nf_sys, "eth0", NULL), -EOPNOTSUPP);
+        ck_assert_int_eq(rtnl_check_can_bitrate(&nf_sys, "can1", NULL), -ENETDOWN);
+        ck_assert_int_eq(rtnl_check_can_bitrate(&nf_sys, "can7", NULL), -ENODEV);
+        ck_assert_uint_eq(NF.n_requests, req + 4); /* the GETLINKs only */
+        ck_assert_str_eq(NF.ops, "");
+        ck_assert_uint_eq(NF.n_sockets, NF.n_closes);
+}
+END_TEST
+
 /* ---- watcher on the fake ---- */
 
 static void push_event(int fd, uint16_t type, int ifindex, const char *name, unsigned flags) {
@@ -1273,6 +1307,7 @@ int main(void) {
         tcase_add_test(tc, fake_request_failures);
         tcase_add_test(tc, fake_reply_filtering);
         tcase_add_test(tc, fake_set_can_bitrate);
+        tcase_add_test(tc, fake_check_can_bitrate);
         tcase_add_test(tc, fake_watch_events);
         tcase_add_test(tc, fake_watch_resync);
         tcase_add_test(tc, fake_watch_batch_bounded);
