@@ -25,6 +25,8 @@ typedef struct ctl_context {
         bool no_store;
         bool no_verify;
         bool skip_missing;
+        bool force;                 /* assign: even a taken node-ID */
+        bool quiet;                 /* no report of what was done */
         bool has_delay;
         uint16_t delay_ms;
         bool has_vendor, has_product;

@@ -373,6 +373,77 @@ static int bus_of_identity(ctl_context *c, const uint32_t id[4], char **ret_ifna
         return r;
 }
 
+/* A device's node-ID and map entry as lssd knows them: 0 when unknown. */
+static void device_node_ids(ctl_context *c, const char *ifname, const uint32_t id[4], uint8_t *ret_node_id,
+                            uint8_t *ret_mapped) {
+        ctl_objects o;
+        *ret_node_id = *ret_mapped = 0;
+        if (ctl_objects_load(c, &o) < 0)
+                return;
+        for (size_t i = 0; i < o.n_devices; i++) {
+                const ctl_device_info *d = &o.devices[i];
+                if (d->ifname && strcmp(d->ifname, ifname) == 0 && memcmp(d->id, id, sizeof(d->id)) == 0) {
+                        *ret_node_id = d->node_id;
+                        *ret_mapped = d->mapped_node_id;
+                }
+        }
+        ctl_objects_done(&o);
+}
+
+/* assign: what was done, and a warning when the map says otherwise */
+static void report_assignment(ctl_context *c, const char *ifname, const uint32_t id[4], uint8_t old_id,
+                              uint8_t node_id) {
+        uint8_t now_id, mapped;
+        device_node_ids(c, ifname, id, &now_id, &mapped);
+        char warning[160] = "";
+        if (mapped != 0 && mapped != node_id)
+                snprintf(warning, sizeof(warning), "the map gives this device node-ID %u: the next auto-assign "
+                         "pass (also the one at boot) puts %u back", mapped, mapped);
+        bool changed = old_id != node_id;
+        bool stored = changed && !c->no_store;
+
+        if (c->json) {
+                static const char *const keys[4] = { "vendor", "product", "revision", "serial" };
+                ctl_json j;
+                ctl_json_init(&j, stdout);
+                ctl_json_object_begin(&j);
+                ctl_json_key(&j, "bus");
+                ctl_json_string(&j, ifname);
+                for (size_t i = 0; i < 4; i++) {
+                        ctl_json_key(&j, keys[i]);
+                        ctl_json_uint(&j, id[i]);
+                }
+                ctl_json_key(&j, "old");
+                if (old_id)
+                        ctl_json_uint(&j, old_id);
+                else
+                        ctl_json_null(&j);
+                ctl_json_key(&j, "new");
+                ctl_json_uint(&j, node_id);
+                ctl_json_key(&j, "stored");
+                ctl_json_bool(&j, stored);
+                ctl_json_key(&j, "warning");
+                if (warning[0])
+                        ctl_json_string(&j, warning);
+                else
+                        ctl_json_null(&j);
+                ctl_json_object_end(&j);
+                ctl_json_finish(&j);
+        } else if (!c->quiet) {
+                char from[16] = "?";
+                if (old_id)
+                        snprintf(from, sizeof(from), "%u", old_id);
+                printf("%s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ": ", ifname, id[0],
+                       id[1], id[2], id[3]);
+                if (!changed)
+                        printf("node-ID %u already, nothing changed.\n", node_id);
+                else
+                        printf("node-ID %s -> %u%s.\n", from, node_id, stored ? ", stored" : ", not stored");
+        }
+        if (warning[0])
+                fprintf(stderr, "lssctl: warning: %s\n", warning);
+}
+
 int verb_assign(ctl_context *c) {
         sd_bus_message *m = NULL;
         char *ifname = NULL, *path = NULL;
@@ -423,12 +494,19 @@ int verb_assign(ctl_context *c) {
                 r = append_bool_option(m, "store", false);
         if (r >= 0 && c->no_verify)
                 r = append_bool_option(m, "verify", false);
+        if (r >= 0 && c->force)
+                r = append_bool_option(m, "force", true);
         if (r >= 0)
                 r = sd_bus_message_close_container(m);
-        if (r < 0)
+        if (r < 0) {
                 r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to build the call: %s", strerror(-r));
-        else
-                r = run_built_job(c, m, path, ifname, "AssignNodeId", "Assignment");
+                goto finish;
+        }
+        uint8_t old_id, mapped;
+        device_node_ids(c, ifname, id, &old_id, &mapped);
+        r = run_built_job(c, m, path, ifname, "AssignNodeId", "Assignment");
+        if (r >= 0)
+                report_assignment(c, ifname, id, old_id, node_id);
 finish:
         sd_bus_message_unref(m);
         free(path);

@@ -23,6 +23,8 @@ enum {
         OPT_DELAY = 1 << 6,
         OPT_VENDOR = 1 << 7, /* and --product */
         OPT_SKIP_MISSING = 1 << 8,
+        OPT_FORCE = 1 << 9,
+        OPT_QUIET = 1 << 10,
 };
 
 typedef struct verb {
@@ -37,7 +39,8 @@ static const verb verbs[] = {
         { "status", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER, true, verb_status },
         { "list", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND, true, verb_list },
         { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR, false, verb_scan },
-        { "assign", 2, 2, OPT_BUS | OPT_NO_STORE | OPT_NO_VERIFY, false, verb_assign },
+        { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false,
+          verb_assign },
         { "auto-assign", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE, false,
           verb_auto_assign },
         { "set-bitrate", 1, 1, OPT_BUS | OPT_DELAY | OPT_NO_STORE | OPT_SKIP_MISSING, false, verb_set_bitrate },
@@ -64,11 +67,13 @@ static void help(void) {
                "  -h --help                Show this help\n"
                "     --version             Show the version\n"
                "  -b --bus IFACE           Act on this CAN interface only\n"
-               "     --json                JSON output (status, list, scan, auto-assign, monitor, raw)\n"
+               "     --json                JSON output (status, list, scan, assign, auto-assign, monitor, raw)\n"
                "     --no-pager            Do not pipe output into a pager\n"
                "     --no-legend           No column headers (list, scan, auto-assign)\n"
                "     --no-store            Do not store in the slaves (assign, auto-assign, set-bitrate)\n"
                "     --no-verify           Do not wait for the boot-up after assigning (assign)\n"
+               "     --force               Give the node-ID even if another device answers to it (assign)\n"
+               "  -q --quiet               Do not say what was done (assign)\n"
                "     --delay MS            Switch delay for set-bitrate (default 100)\n"
                "     --skip-missing        set-bitrate: go ahead without mapped devices the scan misses\n"
                "     --vendor ID --product ID\n"
@@ -87,6 +92,7 @@ enum {
         ARG_VENDOR,
         ARG_PRODUCT,
         ARG_SKIP_MISSING,
+        ARG_FORCE,
 };
 
 static const char *option_name(unsigned flag) {
@@ -100,6 +106,8 @@ static const char *option_name(unsigned flag) {
         case OPT_DELAY: return "--delay";
         case OPT_VENDOR: return "--vendor/--product";
         case OPT_SKIP_MISSING: return "--skip-missing";
+        case OPT_FORCE: return "--force";
+        case OPT_QUIET: return "--quiet";
         default: return "?";
         }
 }
@@ -128,6 +136,8 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 { "vendor", required_argument, NULL, ARG_VENDOR },
                 { "product", required_argument, NULL, ARG_PRODUCT },
                 { "skip-missing", no_argument, NULL, ARG_SKIP_MISSING },
+                { "force", no_argument, NULL, ARG_FORCE },
+                { "quiet", no_argument, NULL, 'q' },
                 {}
         };
         int opt, r;
@@ -135,7 +145,7 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
 
         opterr = 0;
         for (;;) {
-                opt = getopt_long(argc, argv, "+:hb:", options, NULL);
+                opt = getopt_long(argc, argv, "+:hqb:", options, NULL);
                 if (opt < 0) {
                         /* "--" ends the options; else a command or argument: keep it and
                          * look for more options after it */
@@ -189,6 +199,14 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 case ARG_SKIP_MISSING:
                         c->skip_missing = true;
                         *given |= OPT_SKIP_MISSING;
+                        break;
+                case ARG_FORCE:
+                        c->force = true;
+                        *given |= OPT_FORCE;
+                        break;
+                case 'q':
+                        c->quiet = true;
+                        *given |= OPT_QUIET;
                         break;
                 case ARG_VENDOR:
                 case ARG_PRODUCT:
@@ -272,7 +290,7 @@ int main(int argc, char *argv[]) {
                                            : ctl_usage(&c, "Too many arguments for '%s'.", v->name);
                 goto finish;
         }
-        for (unsigned flag = 1; flag <= OPT_SKIP_MISSING; flag <<= 1)
+        for (unsigned flag = 1; flag <= OPT_QUIET; flag <<= 1)
                 if ((given & flag) && !(v->options & flag)) {
                         r = ctl_usage(&c, "Option %s does not go with '%s'.", option_name(flag), v->name);
                         goto finish;

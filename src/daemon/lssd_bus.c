@@ -215,6 +215,7 @@ static void bus_flush_tx(lssd_bus *b) {
                         err = r;
                 else {
                         sent_at = t;
+                        lssd_heard_tx(&b->heard, &f);
                         if (f.id == LSS_COB_MASTER && f.flags == 0) {
                                 b->echo_want = f;
                                 b->echo_want_at = t;
@@ -378,6 +379,7 @@ static void bus_poll_rx(lssd_bus *b) {
                         bus_on_echo(b, &f, rx);
                 else {
                         bus_note_bootup(b, &f, rx);
+                        lssd_heard_rx(&b->heard, &f, lssd_realtime_us());
                         lss_master_on_frame(b->engine, &f, rx);
                 }
         }

@@ -17,6 +17,7 @@
 #include "config/lssd_config.h"
 #include "daemon/lssd_context.h"
 #include "daemon/lssd_device.h"
+#include "daemon/lssd_heard.h"
 #include "daemon/lssd_job.h"
 #include "daemon/lssd_simbus.h"
 #include "lss/lss_master.h"
@@ -80,6 +81,8 @@ struct lssd_bus {
         uint64_t unstored_until;         /* end of that window after the last Reset (the
                                           * engine's wait for a boot-up after an assignment) */
         char *boot_status;               /* how the boot pass ended, for STATUS= */
+        lssd_heard heard;                /* node-IDs other devices speak under */
+        bool avoid[128];                 /* node-IDs not to give (lssd_taken_refresh), read by the engine */
 };
 
 /* Opens the transport (a missing interface is fine), registers the object

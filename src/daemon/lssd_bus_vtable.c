@@ -7,6 +7,7 @@
 
 #include "daemon/lssd_bitrate.h"
 #include "daemon/lssd_bus.h"
+#include "daemon/lssd_taken.h"
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_validate.h"
@@ -107,13 +108,9 @@ int lssd_bus_method_assign(lssd_bus *b, sd_bus_message *m, const lss_identity *i
         r = lssd_auth_check(&b->ctx->auth, m, error);
         if (r < 0)
                 return r;
-        /* never give a node-ID another device answers to */
-        lssd_device *other = lssd_bus_device_with_node_id(b, node_id, id);
-        if (other)
-                return sd_bus_error_setf(error, LSSD_ERROR_CONFLICT,
-                                         "Node-ID %u is in use by device %08x_%08x_%08x_%08x on %s", node_id,
-                                         other->id.vendor, other->id.product, other->id.revision, other->id.serial,
-                                         b->ifname);
+        /* never give a node-ID another device answers to; the job looks again, and probes */
+        if (!o->force && lssd_bus_device_with_node_id(b, node_id, id))
+                return lssd_taken_error(b, error, node_id, id, NULL);
 
         r = lssd_job_new(LSSD_JOB_ASSIGN, m, &j);
         if (r < 0)

@@ -9,6 +9,7 @@
 #include "daemon/lssd_jobs.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_path.h"
+#include "daemon/lssd_taken.h"
 #include "lss/lss_autoassign.h"
 
 /* Failing to send a reply only means the caller is gone: log it and go on. */
@@ -90,6 +91,7 @@ static int run_raw(lssd_bus *b, lssd_job *j, const lss_result *r) {
                         lssd_job_abort(j, LSSD_ERROR_CANCELLED, "The bus was released before this call ran");
                         return 0;
                 }
+                lssd_taken_refresh(b, NULL);
                 int k = lssd_raw_step_start(s, b->engine, lssd_bus_now(b));
                 return k < 0 ? job_start_failed(b, j, k) : 1;
         }
@@ -97,7 +99,10 @@ static int run_raw(lssd_bus *b, lssd_job *j, const lss_result *r) {
         lssd_raw_step_describe(s, what, sizeof(what));
         if (!lssd_raw_step_succeeded(s, r)) {
                 sd_bus_error e = SD_BUS_ERROR_NULL;
-                lssd_raw_step_error(s, r, NULL, &e);
+                if (r->in_use)
+                        lssd_taken_error(b, &e, s->node_id, NULL, NULL);
+                else
+                        lssd_raw_step_error(s, r, NULL, &e);
                 log_info("%s: %s by %s: %s", b->ifname, what, j->sender ? j->sender : "?", e.message);
                 reply_error(j, &e);
                 sd_bus_error_free(&e);
@@ -126,9 +131,10 @@ static int run_raw(lssd_bus *b, lssd_job *j, const lss_result *r) {
 static int execute_start_stage(lssd_bus *b, lssd_job *j) {
         uint64_t now = lssd_bus_now(b);
         int k;
-        if (j->stage < j->n_steps)
+        if (j->stage < j->n_steps) {
+                lssd_taken_refresh(b, NULL);
                 k = lssd_raw_step_start(&j->steps[j->stage], b->engine, now);
-        else
+        } else
                 k = lss_master_switch_global(b->engine, LSS_MODE_WAITING, now);
         return k < 0 ? job_start_failed(b, j, k) : 1;
 }
@@ -161,7 +167,10 @@ static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
                         char prefix[64];
                         snprintf(prefix, sizeof(prefix), "steps[%u] (%s): ", j->stage,
                                  lssd_raw_op_to_string(s->op));
-                        lssd_raw_step_error(s, r, prefix, &j->error);
+                        if (r->in_use)
+                                lssd_taken_error(b, &j->error, s->node_id, NULL, prefix);
+                        else
+                                lssd_raw_step_error(s, r, prefix, &j->error);
                         j->result = lssd_status_to_result(r->status);
                         j->stage = (unsigned) j->n_steps; /* straight to the final switch */
                 }
@@ -206,7 +215,9 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
         if (!r) {
                 unsigned flags = (j->assign.store ? LSS_ASSIGN_STORE : 0u) |
-                                 (j->assign.verify ? LSS_ASSIGN_VERIFY : 0u);
+                                 (j->assign.verify ? LSS_ASSIGN_VERIFY : 0u) |
+                                 (j->assign.force ? 0u : LSS_ASSIGN_CHECK_FREE);
+                lssd_taken_refresh(b, &j->identity);
                 int k = lss_master_assign(b->engine, &j->identity, j->node_id, flags, lssd_bus_now(b));
                 return k < 0 ? job_start_failed(b, j, k) : 1;
         }
@@ -215,7 +226,10 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 sd_bus_error e = SD_BUS_ERROR_NULL;
                 lssd_service service = strncmp(r->message, "Store", 5) == 0 ? LSSD_SERVICE_STORE
                                                                               : LSSD_SERVICE_CONFIGURE_NODE_ID;
-                lssd_error_from_result(&e, r, service, NULL);
+                if (r->in_use)
+                        lssd_taken_error(b, &e, j->node_id, &j->identity, NULL);
+                else
+                        lssd_error_from_result(&e, r, service, NULL);
                 lssd_log_device(LOG_WARNING, b->ifname, &j->identity, j->node_id,
                                 "%s: AssignNodeId %s -> node %u failed: %s", b->ifname, ident, j->node_id,
                                 e.message);
@@ -525,6 +539,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
         if (!r) {
                 j->plan.unstored = b->unstored;
+                lssd_taken_use_heard(b);
                 int k = lss_master_autoassign(b->engine, &j->plan, lssd_bus_now(b));
                 return k < 0 ? job_start_failed(b, j, k) : 1;
         }

@@ -132,6 +132,7 @@ int lssd_scan_options_read(sd_bus_message *m, lssd_scan_options *ret, sd_bus_err
 static const lssd_option assign_table[] = {
         LSSD_OPTION("store", 'b', lssd_assign_options, store),
         LSSD_OPTION("verify", 'b', lssd_assign_options, verify),
+        LSSD_OPTION("force", 'b', lssd_assign_options, force),
         LSSD_OPTION_END,
 };
 

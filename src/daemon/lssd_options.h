@@ -40,9 +40,11 @@ typedef struct lssd_scan_options {
 
 /* AssignNodeId(..., a{sv} options): `store` b (default true): Store
  * Configuration after configuring; `verify` b (default true): wait for the
- * boot-up at the new node-ID (resets a configured slave's communication). */
+ * boot-up at the new node-ID (resets a configured slave's communication);
+ * `force` b (default false): give the node-ID even if another device
+ * answers to it (no check, no probe). */
 typedef struct lssd_assign_options {
-        bool store, verify;
+        bool store, verify, force;
 } lssd_assign_options;
 
 /* Fastscan(a{sv} known): `vendor`, `product`, `revision`, `serial` (u) are

@@ -163,6 +163,18 @@ static int read_step(sd_bus_message *m, size_t i, lssd_raw_step *s, sd_bus_error
         if (r < 0)
                 return r;
 
+        /* ConfigureNodeId also as (node_id, force) */
+        if (op == LSSD_RAW_CONFIGURE_NODE_ID && contents && strcmp(contents, "(yb)") == 0) {
+                int force = 0;
+                *s = (lssd_raw_step) { .op = LSSD_RAW_CONFIGURE_NODE_ID };
+                r = sd_bus_message_read(m, "v", "(yb)", &s->node_id, &force);
+                if (r < 0)
+                        return r;
+                s->force = force;
+                r = lssd_validate_raw_node_id("node_id", s->node_id, error);
+                return r < 0 ? error_prefix(error, r, prefix) : 0;
+        }
+
         const char *sig = raw_table[op].signature;
         if (sig[0] == '\0') { /* no argument: whatever the variant holds is ignored */
                 *s = (lssd_raw_step) { .op = (lssd_raw_op) op };
@@ -174,7 +186,8 @@ static int read_step(sd_bus_message *m, size_t i, lssd_raw_step *s, sd_bus_error
         snprintf(want, sizeof(want), single ? "%s" : "(%s)", sig);
         if (!contents || strcmp(contents, want) != 0)
                 return sd_bus_error_setf(error, SD_BUS_ERROR_INVALID_ARGS,
-                                         "%sargument must be a variant of type '%s', not '%s'", prefix, want,
+                                         "%sargument must be a variant of type '%s'%s, not '%s'", prefix, want,
+                                         op == LSSD_RAW_CONFIGURE_NODE_ID ? " or '(yb)' (node-ID, force)" : "",
                                          contents ? contents : "?");
 
         r = sd_bus_message_enter_container(m, 'v', contents);
@@ -249,7 +262,8 @@ int lssd_raw_step_start(const lssd_raw_step *s, lss_master *engine, uint64_t now
         case LSSD_RAW_SWITCH_MODE_SELECTIVE:
                 return lss_master_switch_selective(engine, &s->id, now);
         case LSSD_RAW_CONFIGURE_NODE_ID:
-                return lss_master_configure_node_id(engine, s->node_id, now);
+                return s->force ? lss_master_configure_node_id(engine, s->node_id, now)
+                                : lss_master_configure_node_id_checked(engine, s->node_id, now);
         case LSSD_RAW_CONFIGURE_BIT_TIMING:
                 return lss_master_configure_bit_timing(engine, s->bit_timing.table, s->bit_timing.index, now);
         case LSSD_RAW_ACTIVATE_BIT_TIMING:
@@ -337,7 +351,7 @@ const char *lssd_raw_step_describe(const lssd_raw_step *s, char *buf, size_t siz
                          s->id.serial);
                 break;
         case LSSD_RAW_CONFIGURE_NODE_ID:
-                snprintf(buf, size, "%s(%u)", name, s->node_id);
+                snprintf(buf, size, "%s(%u%s)", name, s->node_id, s->force ? ", force" : "");
                 break;
         case LSSD_RAW_CONFIGURE_BIT_TIMING:
                 snprintf(buf, size, "%s(%u, %u)", name, s->bit_timing.table, s->bit_timing.index);

@@ -39,6 +39,7 @@ typedef struct lssd_raw_step {
                 lss_identify_range range;     /* IdentifyRemoteSlaves */
                 lss_fastscan_known known;     /* Fastscan */
         };
+        bool force;                           /* ConfigureNodeId (yb) in Execute: no check that it is free */
 } lssd_raw_step;
 
 /* Most steps one Execute() call may carry. */

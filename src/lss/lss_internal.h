@@ -154,6 +154,7 @@ struct lss_master {
         lss_device *devices;
         size_t n_devices, cap_devices;
         lss_master_stats stats;
+        const bool *known_taken;  /* lss_master_set_known_taken(): 128 entries, or NULL */
         lss_progress_fn progress;
         void *progress_ud;
 };

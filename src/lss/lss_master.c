@@ -209,6 +209,43 @@ static int proc_configure_node_id(lss_master *m) {
         PT_END(&m->pc);
 }
 
+/* arg.raw.a: the node-ID; arg.raw.b: check it is free first */
+static int proc_configure_node_id_checked(lss_master *m) {
+        uint8_t node_id = m->arg.raw.a;
+        PT_BEGIN(&m->pc);
+        if (!lss_node_id_valid(node_id))
+                goto configure;
+        /* identical answers from several slaves merge on the wire: the
+         * serial tells them apart */
+        STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, LSS_FIELD_SERIAL), LSS_CS_INQUIRE_SERIAL);
+        if (step_conflict(m)) {
+                master_fail(m, LSS_E_CONFLICT, "more than one slave is in configuration state: Configure Node-ID %u "
+                            "would give node-ID %u to all of them", node_id, node_id);
+                goto out;
+        }
+        STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
+        if (step_answered(m) && !step_conflict(m) && m->step.answer.data[1] == node_id)
+                goto configure; /* its own node-ID */
+        if (m->known_taken && m->known_taken[node_id]) {
+                m->result.in_use = true;
+                master_fail(m, LSS_E_CONFLICT, "node-ID %u already answered on the bus", node_id);
+                goto out;
+        }
+        step_node_in_use(m, node_id);
+        PT_YIELD(&m->pc);
+        if (m->step.n_answers > 0) {
+                m->result.in_use = true;
+                master_fail(m, LSS_E_CONFLICT, "node-ID %u already answers on the bus", node_id);
+                goto out;
+        }
+configure:
+        STEP_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, node_id), LSS_CS_CONFIGURE_NODE_ID);
+        if (single_answer_ok(m, "Configure Node-ID"))
+                error_code_ok(m, "Configure Node-ID");
+out:;
+        PT_END(&m->pc);
+}
+
 static int proc_configure_bit_timing(lss_master *m) {
         PT_BEGIN(&m->pc);
         STEP_REQUEST(m, &m->pc, lss_encode_configure_bit_timing(&f__, m->arg.raw.a, m->arg.raw.b),
@@ -382,6 +419,19 @@ int lss_master_configure_node_id(lss_master *m, uint8_t node_id, uint64_t now) {
                 return -EBUSY;
         m->arg.raw.a = node_id;
         return start_op(m, proc_configure_node_id, false, now);
+}
+
+int lss_master_configure_node_id_checked(lss_master *m, uint8_t node_id, uint64_t now) {
+        if (!lss_node_id_valid(node_id) && node_id != LSS_NODE_ID_UNCONFIGURED)
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        m->arg.raw.a = node_id;
+        return start_op(m, proc_configure_node_id_checked, false, now);
+}
+
+void lss_master_set_known_taken(lss_master *m, const bool *taken) {
+        m->known_taken = taken;
 }
 
 int lss_master_configure_bit_timing(lss_master *m, uint8_t table, uint8_t index, uint64_t now) {

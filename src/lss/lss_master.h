@@ -115,11 +115,23 @@ lss_master *lss_master_new(const lss_timing_config *cfg);
 void lss_master_free(lss_master *m);
 void lss_master_set_timing(lss_master *m, const lss_timing_config *cfg);
 void lss_master_set_progress(lss_master *m, lss_progress_fn fn, void *userdata);
+/* Node-IDs the caller knows other devices answer to (heard on the bus,
+ * known devices): 128 entries it keeps alive and up to date, or NULL. An
+ * assignment with LSS_ASSIGN_CHECK_FREE and a checked Configure Node-ID
+ * refuse them before they probe. */
+void lss_master_set_known_taken(lss_master *m, const bool *taken);
 
 /* ---- raw services (each one operation) ---- */
 int lss_master_switch_global(lss_master *m, enum lss_mode mode, uint64_t now);
 int lss_master_switch_selective(lss_master *m, const lss_identity *id, uint64_t now);
 int lss_master_configure_node_id(lss_master *m, uint8_t node_id, uint64_t now);
+/* The same, but never giving a node-ID a device answers to: first the slave
+ * in configuration state is asked its serial (different answers: several
+ * slaves would all take the node-ID, LSS_E_CONFLICT) and node-ID (already
+ * the one asked for: configured again, nothing else), then node-IDs known
+ * taken (lss_master_set_known_taken) and the SDO probe refuse it with
+ * LSS_E_CONFLICT and result.in_use. 255 (unconfigure) is never checked. */
+int lss_master_configure_node_id_checked(lss_master *m, uint8_t node_id, uint64_t now);
 int lss_master_configure_bit_timing(lss_master *m, uint8_t table, uint8_t index, uint64_t now);
 int lss_master_activate_bit_timing(lss_master *m, uint16_t delay_ms, uint64_t now);
 int lss_master_store(lss_master *m, uint64_t now);
@@ -161,8 +173,9 @@ int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now
 enum lss_assign_flags {
         LSS_ASSIGN_STORE = 1u << 0,  /* Store Configuration after configuring */
         LSS_ASSIGN_VERIFY = 1u << 1, /* wait for the boot-up at the new node-ID */
-        /* first ask the bus whether a device already answers to the node-ID
-         * (SDO upload of 0x1000); if one does: LSS_E_CONFLICT, result.in_use */
+        /* refuse a node-ID known taken (lss_master_set_known_taken), then ask
+         * the bus whether a device already answers to it (SDO upload of
+         * 0x1000); if one does: LSS_E_CONFLICT, result.in_use */
         LSS_ASSIGN_CHECK_FREE = 1u << 2,
 };
 /* Give the slave with this identity a node-ID: selective switch, inquire the

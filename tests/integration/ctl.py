@@ -289,7 +289,11 @@ def test_assign():
             st = env.slave_state('vcan0', SLAVES[0].serial)
             expect_eq((st['active_node_id'], st['stored_node_id']), ('5', '5'), 'stored')
         # the whole identity, decimal works too; --no-store
-        ctl.ok('assign', '236:4660:65538:2147492968', '9', '--no-store')
+        r = ctl('assign', '236:4660:65538:2147492968', '9', '--no-store')
+        expect_eq((r.rc, r.out), (0, 'vcan0: device 0x000000ec:0x00001234:0x00010002:0x80002468: node-ID 6 -> 9, '
+                                  'not stored.\n'), 'assign --no-store (%r)' % r.err)
+        expect_eq(r.err, 'lssctl: warning: the map gives this device node-ID 6: the next auto-assign pass (also the '
+                  'one at boot) puts 6 back\n', 'the map warning')
         d = [x for x in ctl.ok('list', '--json').json if x['serial'] == 0x80002468][0]
         expect_eq((d['node_id'], d['state']), (9, 'mismatch'), 'after assign --no-store')
         if env.real:
@@ -316,7 +320,7 @@ def test_assign():
                            (('1:2:3', '5'), "Invalid identity '1:2:3'"), (('0xZZ', '5'), "Invalid serial"),
                            (('000000ec:1:2:3', '5'), 'Invalid identity'), (('0x1276',), 'Too few arguments')):
             ctl.fails('usage', text, 'assign', *args)
-        ctl.fails('usage', 'does not go with', 'assign', '0x1276', '5', '--json')
+        ctl.fails('usage', 'does not go with', 'assign', '0x1276', '5', '--delay', '5')
         env.alive()
 
 
@@ -337,6 +341,69 @@ def test_auto_assign():
         expect_eq(out.strip().splitlines()[-1], '0 node-IDs assigned, 3 unchanged, 1 unknown.', 'auto-assign text')
         d = [x for x in ctl.ok('list', '--json').json if x['serial'] == 0x1276][0]
         expect_eq((d['node_id'], d['state']), (5, 'assigned'), 'after auto-assign')
+
+
+def test_assign_taken():
+    """No path gives a node-ID another device answers to (issue 17): not the
+    known devices', not one lssd does not know (SDO probe), not one it heard
+    (a heartbeat from a device in NMT Stopped, which answers no SDO); only
+    --force does, and lssctl says what it did."""
+    # configured long ago, another vendor, not in the map: lssd does not know it
+    foreign = Slave(0x1ABC, 0x99, 1, 0x77, 12)
+    with Env({'vcan0': SLAVES + [foreign]}, config=CONFIG % '', candump=True) as env:
+        ctl = Ctl(env)
+        scan_all(env)
+        dev0 = device_path('vcan0', *SLAVES[0].identity)
+
+        def untouched(what):
+            expect_eq(env.get(dev0, DEVICE_IFACE, 'NodeId'), 0xFF, what + ': NodeId')
+            if env.real:
+                expect_eq(env.slave_state('vcan0', SLAVES[0].serial)['active_node_id'], '255', what + ': the slave')
+
+        ctl.fails('conflict', 'Node-ID 12 is taken on vcan0: a device lssd does not know answered an SDO '
+                  'request just now as node 12. Nothing was changed', 'assign', '0x1276', '12')
+        untouched('assign onto a device lssd does not know')
+        ctl.fails('conflict', 'Node-ID 6 is taken on vcan0: device 000000ec:00001234:00010002:80002468 has '
+                  'it', 'assign', '0x1276', '6')
+        untouched('assign onto a known device')
+        if env.real:
+            # a device in NMT Stopped: no SDO answer, but its heartbeat was heard
+            subprocess.run(['cansend', 'vcan0', '714#04'], check=True)
+            time.sleep(0.3)
+            ctl.fails('conflict', 'a device lssd does not know sent a heartbeat (stopped)', 'assign', '0x1276', '20')
+            untouched('assign onto a heartbeat')
+        # the raw service checks too (and says how to force it)
+        r = ctl('raw', 'switch-selective', ident(SLAVES[0]), 'configure-node-id', '12')
+        expect_eq(r.rc, EXIT['conflict'], 'raw configure-node-id onto a taken node-ID (%r)' % r.err)
+        expect('Node-ID 12 is taken on vcan0' in r.err, 'raw: ' + r.err)
+        untouched('raw configure-node-id')
+        name, msg = env.call_error(B0, BUS_IFACE, 'Execute', 'a(sv)', 2, 'SwitchModeSelective', '(uuuu)',
+                                   *SLAVES[0].identity, 'ConfigureNodeId', '(yb)', 12, 'false')
+        expect_eq(name, 'org.lssd.LSS1.Error.Conflict', 'Execute ConfigureNodeId (12, false): ' + msg)
+        expect(msg.startswith('steps[1] (ConfigureNodeId): Node-ID 12 is taken on vcan0'), 'Execute: ' + msg)
+        untouched('Execute ConfigureNodeId')
+        if env.real:
+            configures = [f for f in env.lss_frames('vcan0') if f[1] == 0x7E5 and f[2][0] == 0x11]
+            expect_eq(configures, [], 'Configure Node-ID requests on the wire')
+
+        # forced: done, said, and the map's node-ID is announced to come back
+        r = ctl('assign', '0x1276', '12', '--force')
+        expect_eq(r.rc, 0, 'assign --force (%r)' % r.err)
+        expect_eq(r.out, 'vcan0: device 0x000000ec:0x00001234:0x00010002:0x00001276: node-ID 255 -> 12, stored.\n',
+                  'what assign did')
+        expect('lssctl: warning: the map gives this device node-ID 5: the next auto-assign pass' in r.err,
+               'the map warning: %r' % r.err)
+        if env.real:
+            expect_eq(env.slave_state('vcan0', SLAVES[0].serial)['active_node_id'], '12', 'forced')
+        r = ctl('assign', '0x1276', '5', '--json')
+        expect_eq(r.rc, 0, 'assign --json (%r)' % r.err)
+        expect_eq(json.loads(r.out), {'bus': 'vcan0', 'vendor': 0xEC, 'product': 0x1234, 'revision': 0x00010002,
+                                      'serial': 0x1276, 'old': 12, 'new': 5, 'stored': True, 'warning': None},
+                  'assign --json')
+        expect_eq(ctl.ok('assign', '0x1276', '5', '--quiet').out, '', 'assign --quiet')
+        r = ctl('assign', '0x1276', '30', '--no-store', '--json')
+        expect_eq(json.loads(r.out)['warning'], 'the map gives this device node-ID 5: the next auto-assign pass '
+                  '(also the one at boot) puts 5 back', 'the warning in --json')
 
 
 def test_auto_assign_partial():
@@ -686,6 +753,7 @@ TESTS = {
     'scan': test_scan,
     'scan-two-buses': test_scan_two_buses,
     'assign': test_assign,
+    'assign-taken': test_assign_taken,
     'auto-assign': test_auto_assign,
     'auto-assign-partial': test_auto_assign_partial,
     'set-bitrate': test_set_bitrate,

@@ -157,6 +157,98 @@ START_TEST(assign_duplicate_identity) {
 }
 END_TEST
 
+/* A node-ID another device answers to is never given: the SDO probe finds a
+ * configured device there, a node-ID the caller knows taken is refused
+ * before any probe; without LSS_ASSIGN_CHECK_FREE (the caller's "force")
+ * it is given. */
+START_TEST(assign_refuses_taken_node_id) {
+        static const lss_identity other = { 0x000000EC, 0x00001234, 0x00010002, 0x00009999 };
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, NULL);
+        membus_add_slave(b, &other, 6, NULL);
+        frame_count c = { 0 };
+        membus_set_trace(b, count_frames, &c);
+        lss_master *m = master_default();
+        unsigned flags = LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY | LSS_ASSIGN_CHECK_FREE;
+
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 6, flags, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_CONFLICT);
+        ck_assert(r->in_use);
+        ck_assert_ptr_nonnull(strstr(r->message, "node-ID 6 already answers"));
+        ck_assert_uint_eq(c.configure, 0);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 0xFF);
+        ck_assert(all_waiting(b));
+
+        bool taken[128] = { [7] = true };
+        lss_master_set_known_taken(m, taken);
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 7, flags, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_CONFLICT);
+        ck_assert(r->in_use);
+        ck_assert_ptr_nonnull(strstr(r->message, "node-ID 7 already answered"));
+        ck_assert_uint_eq(c.configure, 0);
+
+        /* forced: the caller said so */
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 6, flags & ~LSS_ASSIGN_CHECK_FREE, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 6);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* The raw Configure Node-ID, checked: a taken node-ID is refused, the
+ * slave's own node-ID is fine, several slaves in configuration state are
+ * refused (they would all take it), 255 is never checked. */
+START_TEST(configure_node_id_checked) {
+        static const lss_identity other = { 0x000000EC, 0x00001234, 0x00010002, 0x00009999 };
+        static const lss_identity third = { 0x000000EC, 0x00001234, 0x00010002, 0x00008888 };
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 9, NULL);
+        membus_add_slave(b, &other, 6, NULL);
+        membus_add_slave(b, &third, 0xFF, NULL);
+        lss_master *m = master_default();
+        bool taken[128] = { [9] = true, [20] = true };
+        lss_master_set_known_taken(m, taken);
+        const lss_result *r;
+
+        ck_assert_int_eq(lss_master_switch_selective(m, &ID1, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        ck_assert_int_eq(lss_master_configure_node_id_checked(m, 6, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_CONFLICT);
+        ck_assert(r->in_use);
+        ck_assert_int_eq(lss_master_configure_node_id_checked(m, 20, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_CONFLICT);
+        ck_assert(r->in_use);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.pending_node_id, 9);
+        /* known taken, but by itself */
+        ck_assert_int_eq(lss_master_configure_node_id_checked(m, 9, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_int_eq(lss_master_configure_node_id_checked(m, 12, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.pending_node_id, 12);
+        ck_assert_int_eq(lss_master_configure_node_id_checked(m, 0xFF, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+
+        /* everybody in configuration: nobody gets it */
+        ck_assert_int_eq(lss_master_switch_global(m, LSS_MODE_CONFIGURATION, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        ck_assert_int_eq(lss_master_configure_node_id_checked(m, 40, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_CONFLICT);
+        ck_assert_ptr_nonnull(strstr(r->message, "more than one slave"));
+        for (unsigned i = 0; i < 3; i++)
+                ck_assert_uint_ne(membus_slave(b, i)->st.pending_node_id, 40);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* The boot-up does not come within the wait: not verified, and said so. */
 START_TEST(assign_not_verified) {
         lss_slave_faults f = faults_latency(5000, 0);
@@ -306,6 +398,8 @@ int main(void) {
         tcase_add_test(tc, assign_configured);
         tcase_add_test(tc, assign_failures);
         tcase_add_test(tc, assign_duplicate_identity);
+        tcase_add_test(tc, assign_refuses_taken_node_id);
+        tcase_add_test(tc, configure_node_id_checked);
         tcase_add_test(tc, assign_not_verified);
         tcase_add_test(tc, fastscan_assign_8);
         tcase_add_test(tc, fastscan_assign_32);

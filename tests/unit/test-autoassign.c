@@ -167,6 +167,24 @@ START_TEST(mixed_bus_ignore) {
 }
 END_TEST
 
+/* A node-ID the caller heard another device speak as (here: A's, 5) is
+ * not given, even when no SDO probe answers: a device in NMT Stopped. */
+START_TEST(heard_node_id_is_not_given) {
+        membus *b = mixed_bus();
+        lss_autoassign_plan p = { .map = mixed_map, .n_map = 5, .store = true };
+        lss_master *m = master_default();
+        bool heard[128] = { [5] = true };
+        lss_master_set_known_taken(m, heard);
+        ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+        ck_assert_int_eq(outcome_of(m, &A)->kind, LSS_OUTCOME_CONFLICT);
+        ck_assert_uint_eq(membus_find(b, &A)->st.active_node_id, 0xFF);
+        ck_assert_int_eq(outcome_of(m, &B)->kind, LSS_OUTCOME_ASSIGNED);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 START_TEST(mixed_bus_pool) {
         membus *b = mixed_bus();
         lss_autoassign_plan p = { .map = mixed_map, .n_map = 5, .store = true, .unknown = LSS_UNKNOWN_POOL,
@@ -312,6 +330,7 @@ int main(void) {
         tcase_add_test(tc, late_device_is_not_missing);
         tcase_add_test(tc, mixed_bus_ignore);
         tcase_add_test(tc, mixed_bus_pool);
+        tcase_add_test(tc, heard_node_id_is_not_given);
         tcase_add_test(tc, late_confirmation_is_not_lost);
         tcase_add_test(tc, bad_plans);
         tcase_add_test(tc, cancel_leaves_waiting);
