@@ -539,10 +539,23 @@ int verb_set_bitrate(ctl_context *c) {
                 r = append_bool_option(m, "skip_missing", true);
         if (r >= 0)
                 r = sd_bus_message_close_container(m);
-        if (r < 0)
+        if (r < 0) {
                 r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to build the call: %s", strerror(-r));
-        else
-                r = run_built_job(c, m, path, ifname, "SetBitrate", "Bit rate change");
+                goto finish;
+        }
+        uint32_t before = 0;
+        (void) sd_bus_get_property_trivial(c->bus, CTL_SERVICE, path, CTL_BUS_IFACE, "Bitrate", NULL, 'u', &before);
+        r = run_built_job(c, m, path, ifname, "SetBitrate", "Bit rate change");
+        if (r >= 0 && !c->quiet) {
+                if (before == bitrate)
+                        printf("%s: the network runs at %" PRIu32 " bit/s already, nothing changed.\n", ifname,
+                               bitrate);
+                else
+                        printf("%s: %s and the interface switched from %" PRIu32 " to %" PRIu32 " bit/s%s.\n",
+                               ifname, c->skip_missing ? "the devices found" : "every device", before, bitrate,
+                               c->no_store ? ", not stored" : ", stored in the devices");
+        }
+finish:
         sd_bus_message_unref(m);
         free(path);
         free(ifname);
@@ -560,6 +573,8 @@ int verb_reload(ctl_context *c) {
                                NULL, NULL);
         if (r < 0)
                 r = ctl_bus_fail(c, &error, r, "Failed to reload the configuration");
+        else if (!c->quiet)
+                printf("lssd read its configuration again.\n");
         sd_bus_error_free(&error);
         return r;
 }

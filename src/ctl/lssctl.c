@@ -43,8 +43,9 @@ static const verb verbs[] = {
           verb_assign },
         { "auto-assign", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE, false,
           verb_auto_assign },
-        { "set-bitrate", 1, 1, OPT_BUS | OPT_DELAY | OPT_NO_STORE | OPT_SKIP_MISSING, false, verb_set_bitrate },
-        { "reload", 0, 0, 0, false, verb_reload },
+        { "set-bitrate", 1, 1, OPT_BUS | OPT_DELAY | OPT_NO_STORE | OPT_SKIP_MISSING | OPT_QUIET, false,
+          verb_set_bitrate },
+        { "reload", 0, 0, OPT_QUIET, false, verb_reload },
         { "monitor", 0, 0, OPT_BUS | OPT_JSON, false, verb_monitor },
         { "raw", 1, -1, OPT_BUS | OPT_JSON, false, verb_raw },
 };
@@ -73,7 +74,7 @@ static void help(void) {
                "     --no-store            Do not store in the slaves (assign, auto-assign, set-bitrate)\n"
                "     --no-verify           Do not wait for the boot-up after assigning (assign)\n"
                "     --force               Give the node-ID even if another device answers to it (assign)\n"
-               "  -q --quiet               Do not say what was done (assign)\n"
+               "  -q --quiet               Do not say what was done (assign, set-bitrate, reload)\n"
                "     --delay MS            Switch delay for set-bitrate (default 100)\n"
                "     --skip-missing        set-bitrate: go ahead without mapped devices the scan misses\n"
                "     --vendor ID --product ID\n"

@@ -209,7 +209,7 @@ static int proc_configure_node_id(lss_master *m) {
         PT_END(&m->pc);
 }
 
-/* arg.raw.a: the node-ID; arg.raw.b: check it is free first */
+/* lss_master_configure_node_id_checked(); arg.raw.a: the node-ID */
 static int proc_configure_node_id_checked(lss_master *m) {
         uint8_t node_id = m->arg.raw.a;
         PT_BEGIN(&m->pc);
