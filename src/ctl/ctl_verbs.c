@@ -514,6 +514,35 @@ finish:
         return r;
 }
 
+/* set-bitrate: a line per device switched, then the interface */
+static int report_bitrate(ctl_context *c, sd_bus_message *reply, const char *ifname, uint32_t before,
+                          uint32_t bitrate) {
+        uint32_t id[4];
+        const char *outcome;
+        size_t n = 0;
+        int r = sd_bus_message_enter_container(reply, 'a', "(uuuus)");
+        while (r >= 0) {
+                r = sd_bus_message_read(reply, "(uuuus)", &id[0], &id[1], &id[2], &id[3], &outcome);
+                if (r <= 0)
+                        break;
+                n++;
+                if (!c->quiet)
+                        printf("%s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32
+                               ": %" PRIu32 " -> %" PRIu32 " bit/s, %s.\n", ifname, id[0], id[1], id[2], id[3],
+                               before, bitrate, strcmp(outcome, "stored") == 0 ? "stored" : "not stored");
+        }
+        if (r < 0)
+                return ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to parse lssd's answer: %s", strerror(-r));
+        if (c->quiet)
+                return 0;
+        if (n == 0 && before == bitrate)
+                printf("%s: the network runs at %" PRIu32 " bit/s already, nothing changed.\n", ifname, bitrate);
+        else
+                printf("%s: the interface and %zu device%s switched from %" PRIu32 " to %" PRIu32 " bit/s.\n",
+                       ifname, n, n == 1 ? "" : "s", before, bitrate);
+        return 0;
+}
+
 int verb_set_bitrate(ctl_context *c) {
         sd_bus_message *m = NULL;
         char *path = NULL, *ifname = NULL;
@@ -545,16 +574,18 @@ int verb_set_bitrate(ctl_context *c) {
         }
         uint32_t before = 0;
         (void) sd_bus_get_property_trivial(c->bus, CTL_SERVICE, path, CTL_BUS_IFACE, "Bitrate", NULL, 'u', &before);
-        r = run_built_job(c, m, path, ifname, "SetBitrate", "Bit rate change");
-        if (r >= 0 && !c->quiet) {
-                if (before == bitrate)
-                        printf("%s: the network runs at %" PRIu32 " bit/s already, nothing changed.\n", ifname,
-                               bitrate);
-                else
-                        printf("%s: %s and the interface switched from %" PRIu32 " to %" PRIu32 " bit/s%s.\n",
-                               ifname, c->skip_missing ? "the devices found" : "every device", before, bitrate,
-                               c->no_store ? ", not stored" : ", stored in the devices");
+        ctl_runner *run = NULL;
+        sd_bus_message *reply = NULL;
+        r = ctl_runner_new(c, c->stderr_tty, &run);
+        if (r < 0) {
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to set up the event loop: %s", strerror(-r));
+                goto finish;
         }
+        r = run_job(c, run, m, path, ifname, "SetBitrate", "Bit rate change", &reply);
+        if (r >= 0)
+                r = report_bitrate(c, reply, ifname, before, bitrate);
+        sd_bus_message_unref(reply);
+        ctl_runner_free(run);
 finish:
         sd_bus_message_unref(m);
         free(path);

@@ -50,7 +50,7 @@ int lssd_bitrate_method(lssd_bus *b, sd_bus_message *m, uint32_t bitrate, uint16
         /* already there: nothing to send */
         if (bitrate == lssd_bus_bitrate(b)) {
                 log_info("%s: SetBitrate %u bit/s: the bus runs at that rate already", b->ifname, bitrate);
-                return sd_bus_reply_method_return(m, NULL);
+                return sd_bus_reply_method_return(m, "a(uuuus)", 0);
         }
 
         r = lssd_job_new(LSSD_JOB_SET_BITRATE, m, &j);
@@ -219,6 +219,25 @@ static void log_outcomes(lssd_bus *b, const lssd_job *j) {
         lssd_bus_refresh_devices(b);
 }
 
+/* The reply: every device switched, with its outcome ("stored", "switched"). */
+static int reply_devices(const lssd_job *j) {
+        sd_bus_message *reply = NULL;
+        int k = sd_bus_message_new_method_return(j->request, &reply);
+        if (k >= 0)
+                k = sd_bus_message_open_container(reply, 'a', "(uuuus)");
+        for (size_t i = 0; k >= 0 && i < j->n_br_devices; i++) {
+                const lss_bitrate_device *d = &j->br_devices[i];
+                k = sd_bus_message_append(reply, "(uuuus)", d->id.vendor, d->id.product, d->id.revision,
+                                          d->id.serial, lss_bitrate_outcome_name(d->outcome));
+        }
+        if (k >= 0)
+                k = sd_bus_message_close_container(reply);
+        if (k >= 0)
+                k = sd_bus_send(NULL, reply, NULL);
+        sd_bus_message_unref(reply);
+        return k;
+}
+
 static int finish(lssd_bus *b, lssd_job *j, const lss_result *r) {
         enum lss_retune rt = lss_master_retune_state(b->engine);
         char host[160];
@@ -236,7 +255,7 @@ static int finish(lssd_bus *b, lssd_job *j, const lss_result *r) {
                            j->n_br_devices == 1 ? "" : "s", j->bitrate, j->bitrate_store ? ", stored" : "");
                 j->result = "done";
                 if (j->request) {
-                        int k = sd_bus_reply_method_return(j->request, NULL);
+                        int k = reply_devices(j);
                         if (k < 0)
                                 log_debug("Failed to send reply to %s: %s", j->sender ? j->sender : "?",
                                           strerror(-k));

@@ -289,7 +289,7 @@ const sd_bus_vtable lssd_bus_vtable[] = {
                                 method_assign_node_id, SD_BUS_VTABLE_UNPRIVILEGED),
         SD_BUS_METHOD_WITH_ARGS("SetBitrate",
                                 SD_BUS_ARGS("u", bitrate, "q", switch_delay_ms, "a{sv}", options),
-                                SD_BUS_NO_RESULT,
+                                SD_BUS_RESULT("a(uuuus)", devices),
                                 method_set_bitrate, SD_BUS_VTABLE_UNPRIVILEGED),
         SD_BUS_METHOD_WITH_ARGS("Cancel", SD_BUS_NO_ARGS, SD_BUS_NO_RESULT, method_cancel,
                                 SD_BUS_VTABLE_UNPRIVILEGED),

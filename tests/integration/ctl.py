@@ -55,6 +55,10 @@ def ident(s):
     return '0x%x:0x%x:0x%x:0x%x' % s.identity
 
 
+def ident8(s):
+    return '0x%08x:0x%08x:0x%08x:0x%08x' % s.identity
+
+
 class Result:
     def __init__(self, args, rc, out, err):
         self.args, self.rc, self.out, self.err = args, rc, out, err
@@ -438,8 +442,11 @@ def test_set_bitrate():
         ctl.fails('not-found', 'no such device or bus', 'set-bitrate', '250k', '--bus', 'vcan0', '--delay', '20')
         expect_eq(env.get(B0, BUS_IFACE, 'Bitrate'), 125000, 'Bitrate after a refused change')
         r = ctl.ok('set-bitrate', '250k', '--bus', 'vcan0', '--delay', '20', '--skip-missing', '--no-store')
-        expect_eq(r.out, 'vcan0: the devices found and the interface switched from 125000 to 250000 bit/s, not '
-                  'stored.\n', 'what set-bitrate did')
+        lines = r.out.splitlines()
+        expect_eq(lines[-1], 'vcan0: the interface and %d devices switched from 125000 to 250000 bit/s.'
+                  % (len(lines) - 1), 'what set-bitrate did: %r' % r.out)
+        expect_eq(sorted(lines[:-1]), sorted('vcan0: device %s: 125000 -> 250000 bit/s, not stored.'
+                                             % ident8(s) for s in SLAVES[:2]), 'a line per device: %r' % r.out)
         expect_eq(ctl.ok('status', '--bus', 'vcan0', '--json').json['buses'][0]['bitrate'], 250000, 'bitrate')
         expect_eq(ctl.ok('set-bitrate', '250k', '--bus', 'vcan0').out,
                   'vcan0: the network runs at 250000 bit/s already, nothing changed.\n', 'set-bitrate again')
