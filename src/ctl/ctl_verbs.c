@@ -135,6 +135,8 @@ static void print_problems(const results *res) {
 static void print_results(ctl_context *c, const results *res, bool assignments) {
         if (assignments)
                 print_problems(res);
+        if (assignments && c->quiet && !c->json)
+                return;
         if (c->json) {
                 ctl_json j;
                 ctl_json_init(&j, stdout);

@@ -41,7 +41,7 @@ static const verb verbs[] = {
         { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR, false, verb_scan },
         { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false,
           verb_assign },
-        { "auto-assign", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE, false,
+        { "auto-assign", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE | OPT_QUIET, false,
           verb_auto_assign },
         { "set-bitrate", 1, 1, OPT_BUS | OPT_DELAY | OPT_NO_STORE | OPT_SKIP_MISSING | OPT_QUIET, false,
           verb_set_bitrate },
@@ -74,7 +74,7 @@ static void help(void) {
                "     --no-store            Do not store in the slaves (assign, auto-assign, set-bitrate)\n"
                "     --no-verify           Do not wait for the boot-up after assigning (assign)\n"
                "     --force               Give the node-ID even if another device answers to it (assign)\n"
-               "  -q --quiet               Do not say what was done (assign, set-bitrate, reload)\n"
+               "  -q --quiet               Do not say what was done (assign, auto-assign, set-bitrate, reload)\n"
                "     --delay MS            Switch delay for set-bitrate (default 100)\n"
                "     --skip-missing        set-bitrate: go ahead without mapped devices the scan misses\n"
                "     --vendor ID --product ID\n"

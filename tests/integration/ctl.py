@@ -425,6 +425,9 @@ def test_auto_assign_partial():
         expect_eq(r.rc, EXIT['partial'], 'exit status of a partial pass with --json')
         expect_eq([(x['serial'], x['outcome']) for x in json.loads(r.out) if x['outcome'] == 'missing'],
                   [(17, 'missing')], '--json names the missing device')
+        r = ctl('auto-assign', '--quiet')
+        expect_eq((r.rc, r.out), (EXIT['partial'], ''), 'auto-assign --quiet: nothing on stdout (%r)' % r.err)
+        expect('device 0x0000009a:0x00000003:0x00000000:0x00000011 missing' in r.err, 'problems still said: %r' % r.err)
 
 
 def test_set_bitrate():
