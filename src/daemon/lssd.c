@@ -12,6 +12,7 @@
 #include "daemon/lssd_context.h"
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_log.h"
+#include "daemon/lssd_ready.h"
 #include "daemon/lssd_simbus.h"
 
 static void help(void) {
@@ -286,8 +287,7 @@ static int run(int argc, char *argv[]) {
         }
         (void) lssd_context_dump_links(ctx);
 
-        lssd_context_notify_ready(ctx);
-        log_info("Ready: serving %zu bus%s", ctx->n_buses, ctx->n_buses == 1 ? "" : "es");
+        lssd_ready_startup_done(ctx);
 
         r = sd_event_loop(ctx->event);
         if (r < 0)

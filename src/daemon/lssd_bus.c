@@ -14,6 +14,7 @@
 #include "daemon/lssd_jobs.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_path.h"
+#include "daemon/lssd_ready.h"
 #include "daemon/lssd_vtables.h"
 #include "lss/lss_proto.h"
 
@@ -121,7 +122,7 @@ static void bus_update_published(lssd_bus *b) {
                 b->state = s;
                 b->changed |= LSSD_BUS_CHANGED_STATE;
                 if (trouble && !b->removing)
-                        lssd_context_notify_status(b->ctx, false);
+                        lssd_ready_status(b->ctx, false);
         }
         uint32_t rate = lssd_bus_bitrate(b);
         if (rate != b->bitrate) {
@@ -273,7 +274,7 @@ static void bus_job_end(lssd_bus *b) {
                 free(b->boot_status);
                 b->boot_status = text;
                 b->boot_pending = false;
-                lssd_context_boot_pass_done(b->ctx);
+                lssd_ready_boot_pass_done(b->ctx);
         }
         /* the boot pass has no caller but its end matters to everybody */
         if ((j->request || j->type == LSSD_JOB_AUTO_ASSIGN) && b->ctx->bus && b->slot)

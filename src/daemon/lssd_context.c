@@ -12,6 +12,7 @@
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_path.h"
+#include "daemon/lssd_ready.h"
 #include "daemon/lssd_vtables.h"
 
 void lssd_args_done(lssd_args *a) {
@@ -47,6 +48,7 @@ lssd_context *lssd_context_free(lssd_context *ctx) {
         ctx->bus = sd_bus_flush_close_unref(ctx->bus);
         ctx->rtnl_source = sd_event_source_disable_unref(ctx->rtnl_source);
         ctx->stop_timeout = sd_event_source_disable_unref(ctx->stop_timeout);
+        ctx->extend_timer = sd_event_source_disable_unref(ctx->extend_timer);
         rtnl_watch_free(ctx->rtnl);
         sd_event_unref(ctx->event);
         lssd_config_free(ctx->config);
@@ -194,7 +196,7 @@ int lssd_context_reload(lssd_context *ctx, sd_bus_error *error) {
                 return sd_bus_error_setf(error, LSSD_ERROR_BUS_DOWN,
                                          "The configuration was loaded but a bus could not be opened: %s",
                                          strerror(-r));
-        lssd_context_notify_status(ctx, false);
+        lssd_ready_status(ctx, false);
         return 0;
 }
 
@@ -217,7 +219,7 @@ void lssd_context_bus_removed(lssd_context *ctx, lssd_bus *b) {
         log_info("%s: removed", b->ifname);
         lssd_bus_free(b);
         lssd_context_emit_buses_changed(ctx);
-        lssd_context_notify_status(ctx, false);
+        lssd_ready_status(ctx, false);
 }
 
 void lssd_context_emit_buses_changed(lssd_context *ctx) {
@@ -370,62 +372,4 @@ void lssd_context_check_stopped(lssd_context *ctx) {
                 if (!lssd_bus_idle(ctx->buses[i]))
                         return;
         context_exit(ctx);
-}
-
-void lssd_context_notify_status(lssd_context *ctx, bool ready) {
-        char status[512];
-        size_t n = 0;
-        size_t served = 0;
-
-        for (size_t i = 0; i < ctx->n_buses; i++)
-                if (!ctx->buses[i]->removing)
-                        served++;
-        n += (size_t) snprintf(status, sizeof(status), "Serving %zu bus%s", served, served == 1 ? "" : "es");
-        for (size_t i = 0; i < ctx->n_buses && n < sizeof(status); i++) {
-                const lssd_bus *b = ctx->buses[i];
-                if (b->removing)
-                        continue;
-                n += (size_t) snprintf(status + n, sizeof(status) - n, "%s %s (%s)", i == 0 ? ":" : ",", b->ifname,
-                                       lssd_bus_state(b));
-        }
-        for (size_t i = 0; i < ctx->n_buses && n < sizeof(status); i++) {
-                const lssd_bus *b = ctx->buses[i];
-                if (b->removing)
-                        continue;
-                if (b->boot_pending && b->link == LSS_LINK_UP)
-                        n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s: auto-assigning", b->ifname);
-                else if (b->boot_pending)
-                        n += (size_t) snprintf(status + n, sizeof(status) - n, "; waiting for %s", b->ifname);
-                else if (b->boot_status)
-                        n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s", b->boot_status);
-        }
-        (void) sd_notifyf(0, "%sSTATUS=%s", ready ? "READY=1\n" : "", status);
-}
-
-static bool boot_passes_running(const lssd_context *ctx) {
-        for (size_t i = 0; i < ctx->n_buses; i++)
-                if (ctx->buses[i]->boot_pending && ctx->buses[i]->link == LSS_LINK_UP && !ctx->buses[i]->removing)
-                        return true;
-        return false;
-}
-
-void lssd_context_notify_ready(lssd_context *ctx) {
-        ctx->started = true;
-        if (boot_passes_running(ctx)) {
-                ctx->ready_deferred = true;
-                lssd_context_notify_status(ctx, false);
-                log_info("Auto-assigning before reporting ready");
-                return;
-        }
-        lssd_context_notify_status(ctx, true);
-}
-
-void lssd_context_boot_pass_done(lssd_context *ctx) {
-        if (ctx->ready_deferred && !boot_passes_running(ctx)) {
-                ctx->ready_deferred = false;
-                lssd_context_notify_status(ctx, true);
-                log_info("Boot auto-assignment over: ready");
-                return;
-        }
-        lssd_context_notify_status(ctx, false);
 }

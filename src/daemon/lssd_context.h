@@ -61,6 +61,9 @@ typedef struct lssd_context {
         bool stopping;
         bool started;              /* past start-up: buses added now get no boot pass */
         bool ready_deferred;       /* READY=1 waits for boot auto-assign passes */
+        sd_event_source *extend_timer; /* meanwhile: EXTEND_TIMEOUT_USEC= while they make progress */
+        uint64_t deferred_since;   /* CLOCK_MONOTONIC µs */
+        uint64_t boot_steps;       /* the passes' engine steps at the last extension */
 } lssd_context;
 
 /* Takes over `args` (it is zeroed). */
@@ -97,11 +100,4 @@ void lssd_context_stop(lssd_context *ctx);
 /* A bus went idle: finish stopping when all are. */
 void lssd_context_check_stopped(lssd_context *ctx);
 
-/* Ready/status line for sd_notify. */
-void lssd_context_notify_status(lssd_context *ctx, bool ready);
-/* Start-up is done: READY=1 now, or once every boot auto-assign pass on a
- * bus that is up finished or gave up (a bus that is not there does not hold
- * it back: STATUS= says it is waited for). */
-void lssd_context_notify_ready(lssd_context *ctx);
-/* A bus's boot pass ended. */
-void lssd_context_boot_pass_done(lssd_context *ctx);
+

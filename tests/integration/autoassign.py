@@ -110,6 +110,12 @@ def test_encoder():
         before = [m for m in env.notify_msgs if m is not ready and m['_t'] <= ready['_t']]
         expect(any('auto-assigning' in m.get('STATUS', '') for m in before),
                'a STATUS saying the pass runs came before READY: %r' % before)
+        # systemd's start timeout is extended while the pass runs (issue 19)
+        expect(any(int(m.get('EXTEND_TIMEOUT_USEC', 0)) >= 30000000 for m in before),
+               'EXTEND_TIMEOUT_USEC before READY: %r' % before)
+        # the journal says "Ready" when READY=1 goes, after the pass's result
+        out = env.lssd_output()
+        expect(0 <= out.find('6 assigned') < out.find('Ready: '), 'journal: the pass, then Ready:\n' + out)
 
         for s, node in ENCODER_MAP:
             p = device_path('vcan0', 0xEC, 0x3A, 0x10, s)
