@@ -216,6 +216,12 @@ static int setup_signals(lssd_context *ctx) {
         return 0;
 }
 
+/* A bad configuration at start: its own exit status, which lssd.service's
+ * RestartPreventExitStatus= keeps from becoming a restart loop (restarting
+ * cannot fix the file). */
+#define EXIT_BAD_CONFIG 78 /* EX_CONFIG */
+static bool bad_config;
+
 static int run(int argc, char *argv[]) {
         lssd_args args = { 0 };
         lssd_context *ctx = NULL;
@@ -249,6 +255,7 @@ static int run(int argc, char *argv[]) {
         lssd_diag_clear(&diag);
         if (r < 0) {
                 log_error_errno(r, "Failed to load the configuration");
+                bad_config = true;
                 goto finish;
         }
         if (config->n_buses == 0)
@@ -301,5 +308,5 @@ finish:
 
 int main(int argc, char *argv[]) {
         int r = run(argc, argv);
-        return r < 0 ? EXIT_FAILURE : EXIT_SUCCESS;
+        return r >= 0 ? EXIT_SUCCESS : bad_config ? EXIT_BAD_CONFIG : EXIT_FAILURE;
 }

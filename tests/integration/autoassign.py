@@ -425,7 +425,7 @@ def test_bad_config():
             expect(file_line(path, chk.stderr), '--check-config %s names file:line: %r' % (name, chk.stderr[-500:]))
             start = subprocess.run(unit_exec_start(path), capture_output=True, text=True, timeout=60,
                                    env=dict(os.environ, DBUS_SYSTEM_BUS_ADDRESS=env.address))
-            expect(start.returncode != 0, 'lssd started with the %s file' % name)
+            expect_eq(start.returncode, 78, 'lssd exit status with the %s file (EX_CONFIG: no restart loop)' % name)
             expect(file_line(path, start.stderr + start.stdout), 'lssd on %s names file:line: %r' %
                    (name, (start.stderr + start.stdout)[-500:]))
         if env.real:
