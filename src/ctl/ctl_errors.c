@@ -21,6 +21,7 @@ const ctl_error_info ctl_error_table[] = {
         { LSS_ERR("LimitsExceeded"), CTL_EXIT_LIMITS_EXCEEDED, "too much at once: the job queue is full" },
         { LSS_ERR("PermissionDenied"), CTL_EXIT_PERMISSION_DENIED,
           "lssd itself is not permitted to do this (e.g. retune the CAN interface without CAP_NET_ADMIN)" },
+        { LSS_ERR("NotHeld"), CTL_EXIT_NOT_HELD, "the bus is not held: raw services need Acquire() first" },
         { DBUS_ERR("InvalidArgs"), CTL_EXIT_USAGE, "invalid argument" },
         { DBUS_ERR("AccessDenied"), CTL_EXIT_ACCESS_DENIED,
           "permission denied: this needs root or membership in group 'lssd'" },

@@ -24,6 +24,7 @@ enum {
         CTL_EXIT_BAD_CONFIG = 15,      /* ReloadConfig: InvalidFileContent */
         CTL_EXIT_PERMISSION_DENIED = 16, /* lssd's own PermissionDenied, not the caller's */
         CTL_EXIT_PARTIAL = 17,         /* auto-assign: a mapped device missing, in conflict or failed */
+        CTL_EXIT_NOT_HELD = 18,        /* a raw service without holding the bus */
         CTL_EXIT_INTERRUPTED = 130,    /* ^C: the job was cancelled */
 };
 

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* lssd: the CANopen LSS master daemon. */
 #include <errno.h>
+#include <inttypes.h>
 #include <getopt.h>
 #include <signal.h>
 #include <stdio.h>
@@ -63,7 +64,7 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                 { "version", no_argument, NULL, ARG_VERSION },
                 { "config", required_argument, NULL, 'c' },
                 { "bus", required_argument, NULL, 'b' },
-                { "check-config", no_argument, NULL, ARG_CHECK_CONFIG },
+                { "check-config", optional_argument, NULL, ARG_CHECK_CONFIG },
                 { "queue-size", required_argument, NULL, ARG_QUEUE_SIZE },
                 { "lss-timeout", required_argument, NULL, ARG_LSS_TIMEOUT },
                 { "simulate", no_argument, NULL, ARG_SIMULATE },
@@ -94,6 +95,13 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                         break;
                 case ARG_CHECK_CONFIG:
                         a->check_config = true;
+                        if (optarg) { /* --check-config=FILE */
+                                free(a->config_path);
+                                a->config_path = strdup(optarg);
+                                if (!a->config_path)
+                                        return log_error_errno(-ENOMEM, "Out of memory");
+                                a->config_explicit = true;
+                        }
                         break;
                 case ARG_QUEUE_SIZE: {
                         char *end;
@@ -144,8 +152,8 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                         return -EINVAL;
                 }
 
-        /* `lssd --check-config FILE` */
-        if (optind < argc && a->check_config && optind + 1 == argc && !a->config_path) {
+        /* `lssd --check-config FILE`: the first word is the file, any other is one too many */
+        if (optind < argc && a->check_config && !a->config_path) {
                 a->config_path = strdup(argv[optind]);
                 if (!a->config_path)
                         return log_error_errno(-ENOMEM, "Out of memory");
@@ -175,9 +183,26 @@ static int check_config(lssd_context *ctx) {
                 fprintf(stderr, "Configuration is bad.\n");
                 return r;
         }
+        if (!c->source && c->n_buses == 0) {
+                fprintf(stderr, "Nothing to check: %s does not exist and no --bus was given (lssd --check-config "
+                        "FILE).\n", LSSD_DEFAULT_CONFIG);
+                lssd_config_free(c);
+                return -ENOENT;
+        }
+        /* what was read, the map too: a typo shows here, not at the next boot */
         for (size_t i = 0; i < c->n_buses; i++) {
+                const lssd_bus_config *b = &c->buses[i];
                 char desc[LSSD_BUS_DESCRIBE_MAX];
-                printf("%s\n", lssd_bus_config_describe(&c->buses[i], desc, sizeof(desc)));
+                printf("%s\n", lssd_bus_config_describe(b, desc, sizeof(desc)));
+                for (size_t k = 0; k < b->n_devices; k++) {
+                        const lssd_device_config *d = &b->devices[k];
+                        char rev[16] = "any";
+                        if (d->has_revision)
+                                snprintf(rev, sizeof(rev), "0x%08" PRIx32, d->identity.revision);
+                        printf("  line %u: vendor 0x%08" PRIx32 " product 0x%08" PRIx32 " revision %s serial 0x%08"
+                               PRIx32 " -> node-ID %u\n", d->line, d->identity.vendor, d->identity.product, rev,
+                               d->identity.serial, d->node_id);
+                }
         }
         printf("Configuration %s is good: %zu bus%s.\n", c->source ? c->source : "(command line)", c->n_buses,
                c->n_buses == 1 ? "" : "es");

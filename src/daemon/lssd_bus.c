@@ -457,7 +457,7 @@ int lssd_bus_check_available(lssd_bus *b, const char *sender, bool raw, sd_bus_e
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s (Acquire)", b->ifname,
                                          b->holder_name);
         if (raw && !is_holder(b, sender))
-                return sd_bus_error_setf(error, SD_BUS_ERROR_ACCESS_DENIED,
+                return sd_bus_error_setf(error, LSSD_ERROR_NOT_HELD,
                                          "Raw LSS services need the bus held: call Acquire() on %s first, "
                                          "or use Execute()", b->ifname);
         if (b->link != LSS_LINK_UP)

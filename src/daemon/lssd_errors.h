@@ -22,6 +22,8 @@
 /* lssd itself lacks a privilege (CAP_NET_ADMIN to retune an interface);
  * not the caller's AccessDenied */
 #define LSSD_ERROR_PERMISSION_DENIED LSSD_ERROR_PREFIX "PermissionDenied"
+/* a raw service by a caller that does not hold the bus (Acquire()) */
+#define LSSD_ERROR_NOT_HELD        LSSD_ERROR_PREFIX "NotHeld"
 
 /* ReloadConfig() with a bad file (the standard D-Bus name, as dbus-daemon uses it). */
 #define LSSD_ERROR_INVALID_FILE_CONTENT "org.freedesktop.DBus.Error.InvalidFileContent"

@@ -376,7 +376,7 @@ def test_raw():
             raise AssertionError(method + ' succeeded')
 
         # not without Acquire
-        expect_eq(h_err('SwitchModeGlobal', 'y', 1)[0], ACCESS_DENIED, 'raw service without Acquire')
+        expect_eq(h_err('SwitchModeGlobal', 'y', 1)[0], ERR + 'NotHeld', 'raw service without Acquire')
         h('Acquire')
         h('Acquire')  # again: nothing happens
         expect_eq(env.get(B0, BUS_IFACE, 'State'), 'busy', 'State while held')
@@ -419,7 +419,7 @@ def test_raw():
         if env.real:
             env.wait_until(lambda: all_waiting(env, 'vcan0', SLAVES), what='all slaves waiting after Release')
             expect_eq(env.slave_state('vcan0', s.serial)['stored_node_id'], '20', 'stored node-ID')
-        expect_eq(h_err('InquireNodeId')[0], ACCESS_DENIED, 'raw service after Release')
+        expect_eq(h_err('InquireNodeId')[0], ERR + 'NotHeld', 'raw service after Release')
         h('Release')  # not held: nothing happens
 
 
@@ -521,7 +521,7 @@ def test_bad_arguments():
              INVALID_ARGS, 'rev_lo'),
             (B0, BUS_IFACE, 'Execute', ('a(sv)', 65) + ('InquireNodeId', 'b', 'true') * 65,
              ERR + 'LimitsExceeded', 'at most 64'),
-            (B0, BUS_IFACE, 'SwitchModeGlobal', ('y', 1), ACCESS_DENIED, 'Acquire'),
+            (B0, BUS_IFACE, 'SwitchModeGlobal', ('y', 1), ERR + 'NotHeld', 'Acquire'),
             (B0, BUS_IFACE, 'ConfigureNodeId', ('s', 'x'), INVALID_ARGS, ''),
             (B0, BUS_IFACE, 'NoSuchMethod', (), 'org.freedesktop.DBus.Error.UnknownMethod', ''),
             (MANAGER, MANAGER_IFACE, 'GetBus', ('s', ''), INVALID_ARGS, 'interface'),
@@ -873,6 +873,39 @@ def test_bus_down():
         env.alive()
 
 
+
+def test_check_config():
+    """lssd --check-config as lssd(8) says: FILE as a word or with '=', the
+    map it read shown line by line, an extra word named, no file at all an
+    error (issue 21)."""
+    import tempfile
+    lssd = os.environ.get('LSSD_BINARY', 'lssd')
+    conf = os.path.join(SOURCE_ROOT, 'conf', 'lssd.conf')
+
+    def check(*args):
+        return subprocess.run([lssd] + list(args), capture_output=True, text=True, timeout=60)
+    for args in (('--check-config', conf), ('--check-config=' + conf)):
+        r = check(*args) if isinstance(args, tuple) else check(args)
+        expect(r.returncode == 0, '%r: %r' % (args, r))
+        expect('line 92: vendor 0x000000ec product 0x00001234 revision any serial 0x00001276 -> node-ID 5'
+               in r.stdout, 'the map shown: %r' % r.stdout)
+    r = check('--check-config', conf, 'extra')
+    expect(r.returncode == 1 and "Unexpected argument 'extra'" in r.stderr, 'the extra word named: %r' % r)
+    with tempfile.TemporaryDirectory() as d:
+        # no file: the default does not exist here (a private --config that is missing is an error too)
+        r = check('--check-config', '--config', os.path.join(d, 'none.conf'))
+        expect(r.returncode == 1 and 'none.conf' in r.stderr, 'a missing file: %r' % r)
+        path = os.path.join(d, 'zeros.conf')
+        with open(path, 'w') as f:
+            f.write('buses = ( { interface = "can0"; vendor = 1; product = 2;\n'
+                    '  devices = ( { serial = 3; node_id = 010; } ); } );\n')
+        r = check('--check-config', path)
+        expect(r.returncode == 0 and 'line 2: ' in r.stdout and '-> node-ID 10' in r.stdout,
+               'what node_id = 010 was read as: %r' % r)
+    if not os.path.exists('/etc/lssd/lssd.conf'):
+        r = check('--check-config')
+        expect(r.returncode == 1 and 'Nothing to check' in r.stderr, 'no file, no --bus: %r' % r)
+
 TESTS = {
     'introspection': test_introspection,
     'properties': test_properties,
@@ -892,6 +925,7 @@ TESTS = {
     'two-buses': test_two_buses,
     'lifecycle': test_lifecycle,
     'second-instance': test_second_instance,
+    'check-config': test_check_config,
     'reload': test_reload,
     'bus-down': test_bus_down,
 }

@@ -12,6 +12,7 @@ static const char *const contract_names[] = {
         "org.lssd.LSS1.Error.BusDown",    "org.lssd.LSS1.Error.BusOff",   "org.lssd.LSS1.Error.NotFound",
         "org.lssd.LSS1.Error.Conflict",   "org.lssd.LSS1.Error.Cancelled", "org.lssd.LSS1.Error.NotSupported",
         "org.lssd.LSS1.Error.LimitsExceeded", "org.lssd.LSS1.Error.PermissionDenied",
+        "org.lssd.LSS1.Error.NotHeld",
 };
 
 /* Every name of the v1 contract is in the map, once, with its own errno. */
