@@ -48,6 +48,11 @@ int ctl_bus_fail(ctl_context *c, const sd_bus_error *error, int r, const char *w
                 return ctl_fail(c, e->exit_code, r, "lssd is not running.");
         if (!name)
                 return ctl_fail(c, CTL_EXIT_FAILURE, r, "%s: %s", what, strerror(r < 0 ? -r : EIO));
+        /* dbus-daemon's own refusal is a dump of its matched rule: the
+         * sentence says it all (lssd's own AccessDenied messages stay) */
+        if (e->exit_code == CTL_EXIT_ACCESS_DENIED && error->message &&
+            strncmp(error->message, "Rejected send message", strlen("Rejected send message")) == 0)
+                return ctl_fail(c, e->exit_code, r, "%s: %s.", what, e->sentence);
         if (error->message && *error->message)
                 return ctl_fail(c, e->exit_code, r, "%s: %s (%s)", what, e->sentence, error->message);
         return ctl_fail(c, e->exit_code, r, "%s: %s (%s)", what, e->sentence, name);
