@@ -438,6 +438,16 @@ int socketcan_port_open(const char *ifname, const socketcan_config *cfg, socketc
         return 0;
 }
 
+bool socketcan_kernel_has_can(const can_sys *sys) {
+        if (!sys)
+                sys = can_sys_default();
+        int fd = sys->socket(sys->userdata, PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+        if (fd >= 0)
+                (void) sys->close(sys->userdata, fd);
+        /* only a missing address family says "no CAN"; anything else (fd limits) is not our business here */
+        return fd != -EAFNOSUPPORT && fd != -EPROTONOSUPPORT;
+}
+
 socketcan_port *socketcan_port_free(socketcan_port *p) {
         if (!p)
                 return NULL;

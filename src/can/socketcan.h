@@ -42,6 +42,10 @@ typedef struct socketcan_config {
 int socketcan_port_open(const char *ifname, const socketcan_config *cfg, socketcan_port **ret);
 /* Closes the socket and frees; returns NULL. NULL is fine. */
 socketcan_port *socketcan_port_free(socketcan_port *p);
+/* Whether the kernel has CAN (a CAN_RAW socket opens; the kernel loads
+ * can-raw on demand): a missing interface on a kernel without it never
+ * appears. `sys` NULL = the real system calls. */
+bool socketcan_kernel_has_can(const can_sys *sys);
 
 /* Closes the socket (if any) and opens a new one by name. 0 when open now,
  * -ENODEV when the interface is (still) missing, other errors as open. */

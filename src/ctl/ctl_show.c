@@ -14,14 +14,14 @@
 #include "ctl/ctl_table.h"
 
 static const char *const device_states[] = {
-        "assigned", "configured", "non-configured", "mismatch", "conflict", "missing",
+        "assigned", "pool", "configured", "non-configured", "mismatch", "conflict", "missing",
 };
 #define N_DEVICE_STATES (sizeof(device_states) / sizeof(device_states[0]))
 
 const char *ctl_device_state_color(const char *state) {
         if (!state)
                 return NULL;
-        if (strcmp(state, "assigned") == 0)
+        if (strcmp(state, "assigned") == 0 || strcmp(state, "pool") == 0)
                 return CTL_ANSI_GREEN;
         if (strcmp(state, "non-configured") == 0)
                 return CTL_ANSI_YELLOW;

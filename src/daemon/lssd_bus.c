@@ -725,7 +725,7 @@ static const char *device_state(lssd_bus *b, const lssd_device *d) {
         /* not given its node-ID because another device answers to it: say so even while non-configured */
         if (d->blocked && !d->missing)
                 return "conflict";
-        return lssd_device_state(d->node_id, d->mapped_node_id, d->missing, conflict, d->assigned);
+        return lssd_device_state(d->node_id, d->mapped_node_id, d->missing, conflict, d->assigned, d->pooled);
 }
 
 int lssd_bus_get_device(lssd_bus *b, const lss_identity *id, uint8_t node_id, lssd_device **ret) {
@@ -893,6 +893,10 @@ int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **re
         b->bitrate = lssd_bus_bitrate(b);
         log_info("%s: serving (%s, link %s)", b->ifname, b->sim ? "simulated" : "SocketCAN",
                  lss_link_state_to_string(b->link));
+        if (!b->sim && b->link == LSS_LINK_GONE && !socketcan_kernel_has_can(NULL))
+                log_warning("%s: this kernel has no CAN support (no AF_CAN sockets): the interface cannot appear "
+                            "until the can and can-raw modules are there (modprobe can-raw); lssd --simulate runs "
+                            "without CAN", b->ifname);
 
         /* a crash may have left slaves in configuration state */
         if (b->link == LSS_LINK_UP)

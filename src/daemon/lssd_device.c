@@ -7,7 +7,7 @@
 #include "daemon/lssd_path.h"
 
 const char *lssd_device_state(uint8_t node_id, uint8_t mapped_node_id, bool missing, bool conflict,
-                              bool assigned) {
+                              bool assigned, bool pooled) {
         if (missing)
                 return "missing";
         if (node_id == LSS_NODE_ID_UNCONFIGURED)
@@ -16,6 +16,8 @@ const char *lssd_device_state(uint8_t node_id, uint8_t mapped_node_id, bool miss
                 return "conflict";
         if (mapped_node_id != 0)
                 return node_id == mapped_node_id ? "assigned" : "mismatch";
+        if (pooled)
+                return "pool";
         return assigned ? "assigned" : "configured";
 }
 

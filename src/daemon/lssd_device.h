@@ -28,6 +28,7 @@ struct lssd_device {
         uint8_t mapped_node_id; /* from the bus's map; 0 = not in the map */
         bool missing;           /* a scan that covers it did not find it */
         bool assigned;          /* its node-ID came from this daemon (AssignNodeId) */
+        bool pooled;            /* ... from the pool (AutoAssign, unknown = "pool") */
         bool blocked;           /* the last auto-assign pass found its mapped node-ID taken */
         const char *state;      /* as published */
         uint64_t last_seen;     /* µs, CLOCK_REALTIME; 0 = never */
@@ -41,9 +42,10 @@ struct lssd_device {
  *   conflict        another present device on the bus has the same node-ID
  *   assigned        it has the node-ID the map (or an AssignNodeId call) gave
  *   mismatch        it is in the map with another node-ID
+ *   pool            not in the map, it has a node-ID AutoAssign gave from the pool
  *   configured      it has a node-ID and is not in the map */
 const char *lssd_device_state(uint8_t node_id, uint8_t mapped_node_id, bool missing, bool conflict,
-                              bool assigned);
+                              bool assigned, bool pooled);
 
 int lssd_device_new(lssd_bus *bus, const char *ifname, const lss_identity *id, lssd_device **ret);
 lssd_device *lssd_device_free(lssd_device *d);

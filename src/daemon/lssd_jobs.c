@@ -248,6 +248,7 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                         d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
                 d->node_id = j->node_id;
                 d->assigned = true;
+                d->pooled = false;
                 d->blocked = false;
                 d->missing = false;
                 d->last_seen = lssd_realtime_us();
@@ -483,8 +484,10 @@ static void autoassign_publish_one(lssd_bus *b, const lssd_job *j, const lss_out
                 d->node_id = o->new_node_id;
                 d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
         }
-        if (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL)
+        if (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL) {
                 d->assigned = true;
+                d->pooled = o->kind == LSS_OUTCOME_POOL;
+        }
         d->blocked = o->kind == LSS_OUTCOME_CONFLICT;
         d->missing = missing;
         if (!missing) {

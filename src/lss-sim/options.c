@@ -98,7 +98,8 @@ int sim_parse_node_id(const char *s, uint8_t *ret) {
 }
 
 int sim_parse_slave(const char *s, sim_slave_spec *ret, const char **what) {
-        static const char *const names[] = { "vendor", "product", "revision", "serial", "node-ID" };
+        /* each a whole phrase: printed as "--slave 'X': <what>" */
+        static const char *const names[] = { "bad vendor", "bad product", "bad revision", "bad serial" };
         sim_slave_spec spec = {};
         char buf[128];
         char *fields[6] = {};
@@ -130,7 +131,7 @@ int sim_parse_slave(const char *s, sim_slave_spec *ret, const char **what) {
         }
         if (n == 5) {
                 if (sim_parse_node_id(fields[4], &spec.node_id) < 0) {
-                        *what = "node-ID (1..127, or 0xFF for non-configured)";
+                        *what = "bad node-ID (1..127, or 0xFF for non-configured)";
                         return -EINVAL;
                 }
                 spec.node_id_given = true;
@@ -433,7 +434,7 @@ int sim_options_parse(sim_options *o, int argc, char **argv, FILE *out, FILE *er
                                 return -ENOMEM;
                         o->slaves = n;
                         if (sim_parse_slave(optarg, &o->slaves[o->n_slaves], &what) < 0)
-                                return fail(err, "--slave '%s': bad %s", optarg, what);
+                                return fail(err, "--slave '%s': %s", optarg, what);
                         o->n_slaves++;
                         break;
                 }

@@ -266,7 +266,7 @@ def test_mixed():
         env.call(MANAGER, MANAGER_IFACE, 'ReloadConfig')
         got = [tuple(x) for x in auto_assign(env)[0]]
         expect_eq(got, [D.identity + (255, 20)], 'AutoAssign with the pool')
-        expect_eq(env.get(dev('vcan0', D), DEVICE_IFACE, 'State'), 'assigned', 'State of the pooled device')
+        expect_eq(env.get(dev('vcan0', D), DEVICE_IFACE, 'State'), 'pool', 'State of the pooled device (as the journal and the reply say)')
         expect_eq(env.get(dev('vcan0', H), DEVICE_IFACE, 'State'), 'conflict', 'State of the blocked device')
         if env.real:
             expect_eq(slave_ids(env, 'vcan0', [D])[D.serial], (20, 20), 'pooled device')

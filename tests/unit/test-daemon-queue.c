@@ -126,17 +126,19 @@ START_TEST(scan_bookkeeping) {
 END_TEST
 
 START_TEST(device_states) {
-        /* node_id, mapped, missing, conflict, assigned */
-        ck_assert_str_eq(lssd_device_state(5, 5, true, false, false), "missing");
-        ck_assert_str_eq(lssd_device_state(0xFF, 5, false, false, false), "non-configured");
-        ck_assert_str_eq(lssd_device_state(0xFF, 0, false, true, false), "non-configured");
-        ck_assert_str_eq(lssd_device_state(5, 0, false, true, false), "conflict");
-        ck_assert_str_eq(lssd_device_state(5, 5, false, true, true), "conflict");
-        ck_assert_str_eq(lssd_device_state(5, 5, false, false, false), "assigned");
-        ck_assert_str_eq(lssd_device_state(6, 5, false, false, false), "mismatch");
-        ck_assert_str_eq(lssd_device_state(6, 5, false, false, true), "mismatch");
-        ck_assert_str_eq(lssd_device_state(6, 0, false, false, false), "configured");
-        ck_assert_str_eq(lssd_device_state(6, 0, false, false, true), "assigned");
+        /* node_id, mapped, missing, conflict, assigned, pooled */
+        ck_assert_str_eq(lssd_device_state(5, 5, true, false, false, false), "missing");
+        ck_assert_str_eq(lssd_device_state(0xFF, 5, false, false, false, false), "non-configured");
+        ck_assert_str_eq(lssd_device_state(0xFF, 0, false, true, false, false), "non-configured");
+        ck_assert_str_eq(lssd_device_state(5, 0, false, true, false, false), "conflict");
+        ck_assert_str_eq(lssd_device_state(5, 5, false, true, true, false), "conflict");
+        ck_assert_str_eq(lssd_device_state(5, 5, false, false, false, false), "assigned");
+        ck_assert_str_eq(lssd_device_state(6, 5, false, false, false, false), "mismatch");
+        ck_assert_str_eq(lssd_device_state(6, 5, false, false, true, false), "mismatch");
+        ck_assert_str_eq(lssd_device_state(6, 0, false, false, false, false), "configured");
+        ck_assert_str_eq(lssd_device_state(6, 0, false, false, true, false), "assigned");
+        ck_assert_str_eq(lssd_device_state(6, 0, false, false, true, true), "pool");
+        ck_assert_str_eq(lssd_device_state(6, 0, false, true, true, true), "conflict");
 }
 END_TEST
 

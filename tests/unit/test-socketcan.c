@@ -502,6 +502,9 @@ START_TEST(open_no_af_can) {
         F.socket_ret = -EAFNOSUPPORT;
         ck_assert_int_eq(socketcan_port_open("can0", &cfg, &p), -EAFNOSUPPORT);
         ck_assert_ptr_null(p);
+        ck_assert(!socketcan_kernel_has_can(&fake_sys));
+        fake_reset();
+        ck_assert(socketcan_kernel_has_can(&fake_sys));
 
         fake_reset();
         F.ifindex = -ENOMEM; /* other lookup errors are errors */
