@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 #include <errno.h>
+#include <stdio.h>
+#include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -61,6 +63,29 @@ static int read_typed(sd_bus_message *m, char type, void *p) {
         return r < 0 ? r : 1;
 }
 
+static int read_last_pass(sd_bus_message *m, ctl_bus_info *b) {
+        const char *kind, *result, *outcome;
+        uint32_t n;
+        size_t len = 0;
+        int r = sd_bus_message_enter_container(m, 'v', "(ttssa{su})");
+        if (r >= 0)
+                r = sd_bus_message_enter_container(m, 'r', "ttssa{su}");
+        if (r >= 0)
+                r = sd_bus_message_read(m, "ttss", &b->pass_started, &b->pass_duration, &kind, &result);
+        if (r < 0)
+                return r;
+        snprintf(b->pass_kind, sizeof(b->pass_kind), "%s", kind);
+        snprintf(b->pass_result, sizeof(b->pass_result), "%s", result);
+        r = sd_bus_message_enter_container(m, 'a', "{su}");
+        while (r >= 0 && (r = sd_bus_message_read(m, "{su}", &outcome, &n)) > 0)
+                if (n > 0 && len < sizeof(b->pass_counts))
+                        len += (size_t) snprintf(b->pass_counts + len, sizeof(b->pass_counts) - len, "%s%" PRIu32 " %s",
+                                                 len ? ", " : "", n, outcome);
+        for (int k = 0; r >= 0 && k < 3; k++)
+                r = sd_bus_message_exit_container(m);
+        return r < 0 ? r : 1;
+}
+
 static int bus_prop(sd_bus_message *m, const char *name, void *userdata) {
         ctl_bus_info *b = userdata;
         int r;
@@ -77,6 +102,8 @@ static int bus_prop(sd_bus_message *m, const char *name, void *userdata) {
                 return read_typed(m, 'u', &b->queue_length);
         if (strcmp(name, "Progress") == 0)
                 return read_typed(m, 'd', &b->progress);
+        if (strcmp(name, "LastPass") == 0)
+                return read_last_pass(m, b);
         return 0;
 }
 

@@ -17,6 +17,11 @@ typedef struct ctl_bus_info {
         uint32_t bitrate;
         uint32_t queue_length;
         double progress;
+        /* LastPass: started 0 when there was none */
+        uint64_t pass_started, pass_duration;  /* µs */
+        char pass_kind[8];                     /* "boot" or "call" */
+        char pass_result[24];
+        char pass_counts[160];                 /* "6 assigned, 2 unchanged" (non-zero ones) */
 } ctl_bus_info;
 
 typedef struct ctl_device_info {

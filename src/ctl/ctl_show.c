@@ -118,6 +118,20 @@ static void status_json(ctl_context *c, const ctl_objects *o) {
                         ctl_json_uint(&j, counts[k]);
                 }
                 ctl_json_object_end(&j);
+                ctl_json_key(&j, "last_pass");
+                if (b->pass_started) {
+                        ctl_json_object_begin(&j);
+                        ctl_json_key(&j, "started");
+                        ctl_json_uint(&j, b->pass_started);
+                        ctl_json_key(&j, "duration");
+                        ctl_json_uint(&j, b->pass_duration);
+                        ctl_json_key(&j, "kind");
+                        ctl_json_string(&j, b->pass_kind);
+                        ctl_json_key(&j, "result");
+                        ctl_json_string(&j, b->pass_result);
+                        ctl_json_object_end(&j);
+                } else
+                        ctl_json_null(&j);
                 ctl_json_object_end(&j);
         }
         ctl_json_array_end(&j);
@@ -183,6 +197,16 @@ static void status_text(ctl_context *c, const ctl_objects *o) {
                         sep = ", ";
                 }
                 printf("%s\n", total ? ")" : "");
+                field(c, "Last pass");
+                if (b->pass_started) {
+                        char when[32];
+                        time_t t = (time_t) (b->pass_started / 1000000u);
+                        struct tm tm;
+                        strftime(when, sizeof(when), "%Y-%m-%d %H:%M:%S", localtime_r(&t, &tm));
+                        printf("%s, %s, %.1f s: %s%s%s\n", b->pass_kind, when, (double) b->pass_duration / 1e6,
+                               b->pass_result, *b->pass_counts ? ", " : "", b->pass_counts);
+                } else
+                        printf("none since lssd started\n");
         }
 }
 

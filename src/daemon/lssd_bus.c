@@ -132,7 +132,7 @@ static void bus_update_published(lssd_bus *b) {
 }
 
 void lssd_bus_flush_changes(lssd_bus *b) {
-        char *names[6];
+        char *names[7];
         size_t n = 0;
 
         if (!b->changed || !b->ctx->bus || !b->slot)
@@ -147,6 +147,8 @@ void lssd_bus_flush_changes(lssd_bus *b) {
                 names[n++] = (char *) "Progress";
         if (b->changed & LSSD_BUS_CHANGED_QUEUE_LENGTH)
                 names[n++] = (char *) "QueueLength";
+        if (b->changed & LSSD_BUS_CHANGED_LAST_PASS)
+                names[n++] = (char *) "LastPass";
         names[n] = NULL;
         b->changed = 0;
         int r = sd_bus_emit_properties_changed_strv(b->ctx->bus, b->path, LSSD_BUS_IFACE, names);

@@ -20,6 +20,7 @@
 #include "daemon/lssd_heard.h"
 #include "daemon/lssd_job.h"
 #include "daemon/lssd_simbus.h"
+#include "lss/lss_autoassign.h"
 #include "lss/lss_master.h"
 
 /* Bus PropertiesChanged bookkeeping. */
@@ -28,6 +29,16 @@
 #define LSSD_BUS_CHANGED_JOB          (1u << 2)
 #define LSSD_BUS_CHANGED_PROGRESS     (1u << 3)
 #define LSSD_BUS_CHANGED_QUEUE_LENGTH (1u << 4)
+#define LSSD_BUS_CHANGED_LAST_PASS    (1u << 5)
+
+/* How the last AutoAssign pass of a bus went (property LastPass). */
+typedef struct lssd_pass_record {
+        uint64_t started_us;             /* CLOCK_REALTIME; 0: no pass yet */
+        uint64_t duration_us;
+        bool boot;                       /* the pass at start, not a call */
+        char result[24];                 /* "done", "partial", or what broke it off */
+        uint32_t counts[LSS_OUTCOME_FAILED + 1]; /* by lss_outcome_kind */
+} lssd_pass_record;
 
 struct lssd_bus {
         lssd_context *ctx;
@@ -83,6 +94,8 @@ struct lssd_bus {
         char *boot_status;               /* how the boot pass ended, for STATUS= */
         lssd_heard heard;                /* node-IDs other devices speak under */
         bool avoid[128];                 /* node-IDs not to give (lssd_taken_refresh), read by the engine */
+        lssd_pass_record last_pass;
+        uint64_t pass_started_us;        /* of the running AutoAssign, CLOCK_REALTIME */
 };
 
 /* Opens the transport (a missing interface is fine), registers the object

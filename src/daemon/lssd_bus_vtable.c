@@ -28,6 +28,24 @@ static int property_get_job(sd_bus *bus, const char *path, const char *interface
         return sd_bus_message_append(reply, "s", lssd_bus_job_name(userdata));
 }
 
+static int property_get_last_pass(sd_bus *bus, const char *path, const char *interface, const char *property,
+                                  sd_bus_message *reply, void *userdata, sd_bus_error *error) {
+        const lssd_pass_record *p = &((const lssd_bus *) userdata)->last_pass;
+        int r = sd_bus_message_open_container(reply, 'r', "ttssa{su}");
+        if (r >= 0)
+                r = sd_bus_message_append(reply, "ttss", p->started_us, p->duration_us,
+                                          p->started_us == 0 ? "" : p->boot ? "boot" : "call", p->result);
+        if (r >= 0)
+                r = sd_bus_message_open_container(reply, 'a', "{su}");
+        for (unsigned k = 0; r >= 0 && p->started_us != 0 && k <= LSS_OUTCOME_FAILED; k++)
+                r = sd_bus_message_append(reply, "{su}", lss_outcome_name((enum lss_outcome_kind) k), p->counts[k]);
+        if (r >= 0)
+                r = sd_bus_message_close_container(reply);
+        if (r >= 0)
+                r = sd_bus_message_close_container(reply);
+        return r;
+}
+
 static int property_get_queue_length(sd_bus *bus, const char *path, const char *interface, const char *property,
                                      sd_bus_message *reply, void *userdata, sd_bus_error *error) {
         const lssd_bus *b = userdata;
@@ -272,6 +290,7 @@ const sd_bus_vtable lssd_bus_vtable[] = {
         SD_BUS_PROPERTY("Bitrate", "u", property_get_bitrate, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("Job", "s", property_get_job, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("Progress", "d", NULL, offsetof(lssd_bus, progress), SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
+        SD_BUS_PROPERTY("LastPass", "(ttssa{su})", property_get_last_pass, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("QueueLength", "u", property_get_queue_length, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
 
         SD_BUS_METHOD_WITH_ARGS("Scan",

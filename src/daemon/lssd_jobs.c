@@ -541,6 +541,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         uint64_t now_realtime = lssd_realtime_us();
 
         if (!r) {
+                b->pass_started_us = now_realtime;
                 j->plan.unstored = b->unstored;
                 lssd_taken_use_heard(b);
                 int k = lss_master_autoassign(b->engine, &j->plan, lssd_bus_now(b));
@@ -575,6 +576,18 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                                                           o->id.vendor, o->id.product, o->id.revision, o->id.serial);
                 }
 
+        lssd_pass_record *rec = &b->last_pass;
+        *rec = (lssd_pass_record) { .started_us = b->pass_started_us, .boot = b->boot_pending,
+                                    .duration_us = now_realtime > b->pass_started_us ?
+                                                           now_realtime - b->pass_started_us : 0 };
+        for (size_t i = 0; i <= LSS_OUTCOME_FAILED; i++)
+                rec->counts[i] = (uint32_t) count[i];
+        snprintf(rec->result, sizeof(rec->result), "%s",
+                 r->status != LSS_OK ? lssd_status_to_result(r->status)
+                 : count[LSS_OUTCOME_MISSING] + count[LSS_OUTCOME_CONFLICT] + count[LSS_OUTCOME_FAILED] > 0 ? "partial"
+                 : "done");
+        b->changed |= LSSD_BUS_CHANGED_LAST_PASS;
+
         snprintf(j->summary, sizeof(j->summary),
                  "%s: %zu assigned, %zu from the pool, %zu unchanged, %zu unknown, %zu missing, %zu conflicts, "
                  "%zu failed", b->ifname, count[LSS_OUTCOME_ASSIGNED], count[LSS_OUTCOME_POOL],
@@ -594,8 +607,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
         log_notice("AutoAssign on %s", j->summary);
         /* the bus matches the map only when every mapped device has its node-ID */
-        j->result = count[LSS_OUTCOME_MISSING] + count[LSS_OUTCOME_CONFLICT] + count[LSS_OUTCOME_FAILED] > 0 ?
-                "partial" : "done";
+        j->result = rec->result;
 
         if (!j->request)
                 return 0;

@@ -117,6 +117,9 @@ def test_encoder():
         out = env.lssd_output()
         expect(0 <= out.find('6 assigned') < out.find('Ready: '), 'journal: the pass, then Ready:\n' + out)
 
+        # how the boot pass went, asked afterwards (issue 21)
+        last = env.get(bus_path('vcan0'), BUS_IFACE, 'LastPass')
+        expect_eq((last[2], last[3], last[4].get('assigned')), ('boot', 'done', 6), 'LastPass after boot: %r' % last)
         for s, node in ENCODER_MAP:
             p = device_path('vcan0', 0xEC, 0x3A, 0x10, s)
             expect_eq(env.get(p, DEVICE_IFACE, 'NodeId'), node, 'NodeId of %x' % s)

@@ -38,7 +38,8 @@ from run import CONFIG, SLAVES, VCAN1  # noqa: E402
 
 JSON_DEVICE_KEYS = ['bus', 'vendor', 'product', 'revision', 'serial', 'node_id', 'mapped_node_id', 'state',
                     'last_seen', 'path']
-JSON_BUS_KEYS = ['interface', 'state', 'bitrate', 'job', 'progress', 'queue_length', 'devices', 'device_states']
+JSON_BUS_KEYS = ['interface', 'state', 'bitrate', 'job', 'progress', 'queue_length', 'devices', 'device_states',
+                 'last_pass']
 
 
 def expect(cond, what):
@@ -331,6 +332,9 @@ def test_assign():
 def test_auto_assign():
     with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
         ctl = Ctl(env)
+        expect_eq(ctl.ok('status', '--json').json['buses'][0]['last_pass'], None, 'no pass yet')
+        expect('Last pass: none since lssd started' in ctl.ok('status').out, 'status before a pass')
+        t0 = time.time()
         got = ctl.ok('auto-assign', '--json').json
         expect_eq([x for x in got if x['outcome'] == 'assigned'],
                   [{'bus': 'vcan0', 'vendor': 0xEC, 'product': 0x1234, 'revision': 0x00010002,
@@ -339,6 +343,12 @@ def test_auto_assign():
         expect_eq(sorted((x['serial'], x['outcome']) for x in got),
                   [(17, 'unchanged'), (0x1276, 'assigned'), (0x80002468, 'unchanged'), (0xFFFFFFFF, 'unknown')],
                   'auto-assign --json: every device')
+        # the pass can be asked about afterwards (issue 21)
+        last = ctl.ok('status', '--json').json['buses'][0]['last_pass']
+        expect_eq((last['kind'], last['result']), ('call', 'done'), 'last_pass')
+        expect(t0 - 1 <= last['started'] / 1e6 <= time.time() and 0 < last['duration'] < 600e6, 'when: %r' % last)
+        expect(re.search(r'Last pass: call, [0-9-]+ [0-9:]+, [0-9.]+ s: done, 2 unchanged, 1 assigned, 1 unknown',
+                         ctl.ok('status').out), 'status text: %r' % ctl.ok('status').out)
         expect_eq([x for x in ctl.ok('auto-assign', '--json').json if x['outcome'] != 'unchanged' and
                    x['outcome'] != 'unknown'], [], 'second auto-assign')
         out = ctl.ok('auto-assign', '--no-store').out
