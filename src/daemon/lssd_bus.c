@@ -172,8 +172,11 @@ static void on_engine_progress(void *userdata, double p) {
         lssd_bus *b = userdata;
         if (!b->job || b->job->n_stages == 0)
                 return;
-        /* the engine's estimate can shrink when a scan finds more to do; a bar never goes back */
+        /* the engine's estimate can shrink when a scan finds more to do; a bar
+         * never goes back, and says 100 % only when the job is over */
         double v = ((double) b->job->stage + p) / (double) b->job->n_stages;
+        if (v > 0.99)
+                v = 0.99;
         if (v > b->progress)
                 set_progress(b, v);
 }

@@ -275,10 +275,22 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
 /* ---- Scan: fastscan enumeration, then slowscan per vendor/product pair ---- */
 
+/* What an enumeration will likely find: the non-configured devices seen
+ * before (the first scan of a bus cannot know: its progress assumes as many
+ * again as found so far). */
+static void expect_finds(lssd_bus *b) {
+        unsigned n = 0;
+        for (const lssd_device *d = b->devices; d; d = d->next)
+                n += !d->missing && d->node_id == LSS_NODE_ID_UNCONFIGURED;
+        lss_master_set_expected_finds(b->engine, n);
+}
+
 int lssd_scan_stage_start(lssd_bus *b, const lssd_job *j) {
         uint64_t now = lssd_bus_now(b);
-        if (j->stage == 0)
+        if (j->stage == 0) {
+                expect_finds(b);
                 return lss_master_enumerate(b->engine, NULL, now);
+        }
         const lssd_vendor_product *p = &j->pairs[j->stage - 1];
         lss_identify_range range = {
                 .vendor = p->vendor, .product = p->product,
@@ -544,6 +556,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 b->pass_started_us = now_realtime;
                 j->plan.unstored = b->unstored;
                 lssd_taken_use_heard(b);
+                expect_finds(b);
                 int k = lss_master_autoassign(b->engine, &j->plan, lssd_bus_now(b));
                 return k < 0 ? job_start_failed(b, j, k) : 1;
         }

@@ -40,6 +40,16 @@ uint64_t lss_enumerate_deadline_us(const lss_timing_config *c) {
         return (LSS_ENUMERATE_MAX_FINDS + 1u) * round;
 }
 
+/* How far k finds are, 0..1: k of the finds expected; with nothing (more)
+ * expected k / (k + 8), which slows down as finds go on but never stops or
+ * nears the end before the pass is over. */
+#define PROGRESS_UNKNOWN_FINDS 8.0
+static double finds_done(const lss_master *m, size_t k) {
+        if (m->expected_finds >= k && m->expected_finds > 0)
+                return (double) k / m->expected_finds;
+        return (double) k / ((double) k + PROGRESS_UNKNOWN_FINDS);
+}
+
 static lss_device *found_before(lss_scan_state *s, const lss_identity *id) {
         for (size_t i = 0; i < s->n_cand; i++)
                 if (lss_identity_equal(&s->cand[i].id, id))
@@ -330,6 +340,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                 s->rounds = s->phantoms = s->failed_scans = 0;
                 s->next_temp = LSS_NODE_ID_MAX;
                 memset(s->back_due, 0, sizeof(s->back_due));
+                s->prog_base0 = m->prog_base;
+                s->prog_span0 = m->prog_span;
                 m->n_devices = 0;
                 /* nobody left in configuration from before */
                 SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
@@ -346,7 +358,13 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 break;
                         }
                         s->fs = (lss_fastscan_state) { .known = s->known };
+                        /* this find's share of the 90 % before the give-back */
+                        m->prog_base = s->prog_base0 + s->prog_span0 * 0.9 * finds_done(m, s->n_cand);
+                        m->prog_span = s->prog_span0 * 0.9 * (finds_done(m, s->n_cand + 1) -
+                                                              finds_done(m, s->n_cand));
                         PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
+                        m->prog_base = s->prog_base0;
+                        m->prog_span = s->prog_span0;
                         if (s->fs.none || m->cancelling)
                                 break;
                         if (!s->fs.found) {
@@ -369,7 +387,6 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         }
                         if (s->confirm == CONFIRM_OK)
                                 s->failed_scans = 0;
-                        master_progress(m, 0.9 * (1.0 - 1.0 / (1.0 + (double) s->n_cand)));
                 }
                 /* also after a failure or a cancel: nobody keeps a temporary node-ID */
                 s->vpc = 0;

@@ -89,6 +89,7 @@ typedef struct lss_scan_state {
         bool keep_stopped;      /* the caller stopped every device: keep those set aside stopped */
         lss_device *again;      /* the candidate a round found a second time */
         bool back_due[128];     /* by temporary node-ID: set aside, not yet seen back at 255 */
+        double prog_base0, prog_span0; /* the caller's progress frame */
         unsigned gb_try;
         bool selected;          /* this round confirmed by a selective switch (all went to waiting first) */
         bool misbehaving;       /* the pass ended on a slave that does not follow CiA 305 (result.id) */
@@ -156,6 +157,10 @@ struct lss_master {
         lss_master_stats stats;
         const bool *known_taken;  /* lss_master_set_known_taken(): 128 entries, or NULL */
         lss_progress_fn progress;
+        /* a nested procedure's 0..1 is this part of the caller's: reported
+         * progress = base + span * p (start_op: 0, 1) */
+        double prog_base, prog_span;
+        unsigned expected_finds;  /* lss_master_set_expected_finds() */
         void *progress_ud;
 };
 

@@ -64,8 +64,13 @@ void lss_master_set_progress(lss_master *m, lss_progress_fn fn, void *userdata) 
 }
 
 void master_progress(lss_master *m, double p) {
+        p = p < 0 ? 0 : p > 1 ? 1 : p;
         if (m->progress)
-                m->progress(m->progress_ud, p < 0 ? 0 : p > 1 ? 1 : p);
+                m->progress(m->progress_ud, m->prog_base + m->prog_span * p);
+}
+
+void lss_master_set_expected_finds(lss_master *m, unsigned n) {
+        m->expected_finds = n;
 }
 
 const char *lss_store_error_name(uint8_t err) {
@@ -151,6 +156,8 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
         memset(&m->result, 0, sizeof(m->result));
         m->result.node_id = LSS_NODE_ID_UNCONFIGURED;
         m->step.phase = PHASE_IDLE;
+        m->prog_base = 0;
+        m->prog_span = 1;
         advance(m);
         return 0;
 }

@@ -120,6 +120,10 @@ void lss_master_set_progress(lss_master *m, lss_progress_fn fn, void *userdata);
  * assignment with LSS_ASSIGN_CHECK_FREE and a checked Configure Node-ID
  * refuse them before they probe. */
 void lss_master_set_known_taken(lss_master *m, const bool *taken);
+/* How many slaves an enumeration (Scan, AutoAssign) will likely find, e.g.
+ * the non-configured devices seen last time: its progress is measured
+ * against it (0, or more found: twice as many as found so far). */
+void lss_master_set_expected_finds(lss_master *m, unsigned n);
 
 /* ---- raw services (each one operation) ---- */
 int lss_master_switch_global(lss_master *m, enum lss_mode mode, uint64_t now);

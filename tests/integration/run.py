@@ -906,6 +906,42 @@ def test_check_config():
         r = check('--check-config')
         expect(r.returncode == 1 and 'Nothing to check' in r.stderr, 'no file, no --bus: %r' % r)
 
+
+def test_progress():
+    """Progress moves with the work (issue 21): sampled during a Scan of 16
+    devices, never backwards, never 1 before the reply; the second Scan,
+    which knows how many to expect, within 0.15 of the elapsed share of its
+    time, and the first one never ahead of it by more than that."""
+    slaves = [Slave(0xEC, 0x1234, 1, 0x100 + i) for i in range(16)]
+    with Env({'vcan0': slaves}) as env:
+        b = bus_path('vcan0')
+        for rep in ('first', 'second'):
+            done = threading.Event()
+
+            def scan():
+                env.call(b, BUS_IFACE, 'Scan', 'a{sv}', 0)
+                done.set()
+            t = threading.Thread(target=scan)
+            t0 = time.monotonic()
+            t.start()
+            samples = []
+            while not done.is_set():
+                p = env.get(b, BUS_IFACE, 'Progress')
+                if not done.is_set():
+                    samples.append((time.monotonic() - t0, p))
+                time.sleep(0.25)
+            t.join()
+            total = time.monotonic() - t0
+            shares = [(s / total, p) for s, p in samples]
+            log('%s scan, %.1f s: %s' % (rep, total, ' '.join('%.2f/%.2f' % x for x in shares)))
+            expect(len(samples) >= 8, 'too few samples: %r' % samples)
+            expect(all(b2 >= a2 for (_, a2), (_, b2) in zip(samples, samples[1:])), 'backwards: %r' % shares)
+            expect(all(p < 1 for _, p in samples), '1 before the end: %r' % shares)
+            # a sample is read up to one D-Bus round trip late: a little slack
+            expect(all(p <= s + 0.15 for s, p in shares), 'ahead of the work: %r' % shares)
+            if rep == 'second':
+                expect(all(abs(p - s) <= 0.15 for s, p in shares if s <= 0.9), 'not with the work: %r' % shares)
+
 TESTS = {
     'introspection': test_introspection,
     'properties': test_properties,
@@ -926,6 +962,7 @@ TESTS = {
     'lifecycle': test_lifecycle,
     'second-instance': test_second_instance,
     'check-config': test_check_config,
+    'progress': test_progress,
     'reload': test_reload,
     'bus-down': test_bus_down,
 }
