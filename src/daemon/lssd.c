@@ -297,15 +297,11 @@ static int run(int argc, char *argv[]) {
         if (r < 0)
                 goto finish;
 
-        /* bus: the manager's objects and the name before any CAN bus is
-         * opened, so that a second lssd exits before it sends a frame (its
-         * switch to waiting would cut into the running one's job). No call
-         * is dispatched before the event loop runs, so the bus objects added
-         * below are there for the first caller. */
+        /* bus: every object (the buses open their sockets but send nothing),
+         * then the name, then the first frames: a client that sees the name
+         * sees every bus, and a second lssd exits before it sends a frame
+         * (its switch to waiting would cut into the running one's job) */
         r = lssd_context_connect_bus(ctx);
-        if (r < 0)
-                goto finish;
-        r = lssd_context_request_name(ctx);
         if (r < 0)
                 goto finish;
         r = lssd_context_open_rtnl(ctx);
@@ -317,6 +313,10 @@ static int run(int argc, char *argv[]) {
                 log_error_errno(r, "Failed to open the buses");
                 goto finish;
         }
+        r = lssd_context_request_name(ctx);
+        if (r < 0)
+                goto finish;
+        lssd_context_start_buses(ctx);
         (void) lssd_context_dump_links(ctx);
 
         lssd_ready_startup_done(ctx);

@@ -947,8 +947,8 @@ void lssd_bus_set_bitrate(lssd_bus *b, uint32_t bitrate) {
 }
 
 /* Kicks off the queued first frames once everything is registered. */
-void lssd_bus_start(lssd_bus *b) {
-        if (b->ctx->bus && b->slot) {
+void lssd_bus_start(lssd_bus *b, bool announce) {
+        if (announce && b->ctx->bus && b->slot) {
                 int r = sd_bus_emit_object_added(b->ctx->bus, b->path);
                 if (r < 0)
                         log_debug("%s: failed to announce the bus: %s", b->ifname, strerror(-r));

@@ -101,9 +101,10 @@ struct lssd_bus {
 /* Opens the transport (a missing interface is fine), registers the object
  * and queues the first frame: switch-global waiting. */
 int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **ret);
-/* Announces the object and sends the queued first frame (call once the
- * D-Bus objects are registered). */
-void lssd_bus_start(lssd_bus *b);
+/* Sends the queued first frame (call once lssd owns its name: a second lssd
+ * must send nothing) and, with `announce`, InterfacesAdded (not for the
+ * buses registered before the name was taken: nobody could see them missing). */
+void lssd_bus_start(lssd_bus *b, bool announce);
 lssd_bus *lssd_bus_free(lssd_bus *b);
 /* A new configuration (after reload): map, timing, bit rate. */
 void lssd_bus_set_config(lssd_bus *b, const lssd_bus_config *config);

@@ -119,8 +119,15 @@ static int context_add_bus(lssd_context *ctx, const lssd_bus_config *c) {
         ctx->buses[ctx->n_buses++] = b;
         char desc[LSSD_BUS_DESCRIBE_MAX];
         log_info("%s", lssd_bus_config_describe(c, desc, sizeof(desc)));
-        lssd_bus_start(b);
+        if (ctx->name_owned)
+                lssd_bus_start(b, true);
         return 0;
+}
+
+void lssd_context_start_buses(lssd_context *ctx) {
+        ctx->name_owned = true;
+        for (size_t i = 0; i < ctx->n_buses; i++)
+                lssd_bus_start(ctx->buses[i], false);
 }
 
 int lssd_context_apply_config(lssd_context *ctx, lssd_config *config) {

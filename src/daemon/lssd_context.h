@@ -60,6 +60,7 @@ typedef struct lssd_context {
         uint64_t next_job_id;
         bool stopping;
         bool started;              /* past start-up: buses added now get no boot pass */
+        bool name_owned;           /* buses may send (lssd_context_start_buses) */
         bool ready_deferred;       /* READY=1 waits for boot auto-assign passes */
         sd_event_source *extend_timer; /* meanwhile: EXTEND_TIMEOUT_USEC= while they make progress */
         uint64_t deferred_since;   /* CLOCK_MONOTONIC µs */
@@ -81,6 +82,9 @@ int lssd_context_apply_config(lssd_context *ctx, lssd_config *config);
 int lssd_context_reload(lssd_context *ctx, sd_bus_error *error);
 
 int lssd_context_open_rtnl(lssd_context *ctx);
+/* lssd owns its name now: every bus sends its first frame, and buses added
+ * from now on do at once. */
+void lssd_context_start_buses(lssd_context *ctx);
 /* Feeds the current state of every link to the buses. */
 int lssd_context_dump_links(lssd_context *ctx);
 int lssd_context_connect_bus(lssd_context *ctx);
