@@ -93,7 +93,7 @@ struct lssd_bus {
                                           * engine's wait for a boot-up after an assignment) */
         char *boot_status;               /* how the boot pass ended, for STATUS= */
         lssd_heard heard;                /* node-IDs other devices speak under */
-        bool avoid[128];                 /* node-IDs not to give (lssd_taken_refresh), read by the engine */
+        bool taken_with_devices;         /* lssd_taken_check() */
         lssd_pass_record last_pass;
         uint64_t pass_started_us;        /* of the running AutoAssign, CLOCK_REALTIME */
 };

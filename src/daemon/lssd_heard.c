@@ -33,6 +33,23 @@ void lssd_heard_rx(lssd_heard *h, const lss_frame *f, uint64_t realtime_us) {
 static void forget(lssd_heard *h, uint8_t node) {
         h->taken[node] = false;
         h->kind[node] = LSSD_HEARD_NOTHING;
+        h->owned[node] = false;
+}
+
+void lssd_heard_owner(lssd_heard *h, uint8_t node_id, const lss_identity *id) {
+        for (unsigned n = 1; n < 128; n++)
+                if (n != node_id && h->owned[n] && lss_identity_equal(&h->owner[n], id))
+                        forget(h, (uint8_t) n);
+        if (node_id == 0 || node_id >= 128)
+                return;
+        h->owned[node_id] = true;
+        h->owner[node_id] = *id;
+}
+
+bool lssd_heard_taken(const lssd_heard *h, uint8_t node_id, const lss_identity *id) {
+        if (node_id >= 128 || !h->taken[node_id])
+                return false;
+        return !(id && h->owned[node_id] && lss_identity_equal(&h->owner[node_id], id));
 }
 
 void lssd_heard_tx(lssd_heard *h, const lss_frame *f) {

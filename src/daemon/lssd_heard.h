@@ -28,12 +28,20 @@ typedef struct lssd_heard {
         uint8_t kind[128];       /* lssd_heard_kind of the last frame */
         uint8_t nmt_state[128];  /* from the last heartbeat */
         uint64_t at[128];        /* CLOCK_REALTIME, µs */
+        bool owned[128];         /* the device lssd knows speaks as that node: */
+        lss_identity owner[128];
 } lssd_heard;
 
 /* A frame received from the bus (not an echo of our own). */
 void lssd_heard_rx(lssd_heard *h, const lss_frame *f, uint64_t realtime_us);
 /* A frame lssd sent: NMT resets make it forget. */
 void lssd_heard_tx(lssd_heard *h, const lss_frame *f);
+/* lssd learnt where device `id` is (node_id, 255 non-configured): what was
+ * heard at its other node-IDs was that device, now gone from there, and is
+ * forgotten; what is heard at node_id is that device's. */
+void lssd_heard_owner(lssd_heard *h, uint8_t node_id, const lss_identity *id);
+/* Whether something other than device `id` (NULL: anybody) was heard at node_id. */
+bool lssd_heard_taken(const lssd_heard *h, uint8_t node_id, const lss_identity *id);
 /* "sent a heartbeat (stopped) 12 s ago"; "" if nothing was heard. */
 const char *lssd_heard_describe(const lssd_heard *h, uint8_t node_id, uint64_t now_realtime_us, char *buf,
                                 size_t size);

@@ -91,7 +91,7 @@ static int run_raw(lssd_bus *b, lssd_job *j, const lss_result *r) {
                         lssd_job_abort(j, LSSD_ERROR_CANCELLED, "The bus was released before this call ran");
                         return 0;
                 }
-                lssd_taken_refresh(b, NULL);
+                lssd_taken_check(b, true);
                 int k = lssd_raw_step_start(s, b->engine, lssd_bus_now(b));
                 return k < 0 ? job_start_failed(b, j, k) : 1;
         }
@@ -132,7 +132,7 @@ static int execute_start_stage(lssd_bus *b, lssd_job *j) {
         uint64_t now = lssd_bus_now(b);
         int k;
         if (j->stage < j->n_steps) {
-                lssd_taken_refresh(b, NULL);
+                lssd_taken_check(b, true);
                 k = lssd_raw_step_start(&j->steps[j->stage], b->engine, now);
         } else
                 k = lss_master_switch_global(b->engine, LSS_MODE_WAITING, now);
@@ -217,7 +217,7 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 unsigned flags = (j->assign.store ? LSS_ASSIGN_STORE : 0u) |
                                  (j->assign.verify ? LSS_ASSIGN_VERIFY : 0u) |
                                  (j->assign.force ? 0u : LSS_ASSIGN_CHECK_FREE);
-                lssd_taken_refresh(b, &j->identity);
+                lssd_taken_check(b, true);
                 int k = lss_master_assign(b->engine, &j->identity, j->node_id, flags, lssd_bus_now(b));
                 return k < 0 ? job_start_failed(b, j, k) : 1;
         }
@@ -247,6 +247,7 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 if (d->node_id != j->node_id)
                         d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
                 d->node_id = j->node_id;
+                lssd_heard_owner(&b->heard, j->node_id, &j->identity);
                 d->assigned = true;
                 d->pooled = false;
                 d->blocked = false;
@@ -343,6 +344,7 @@ static void scan_publish(lssd_bus *b, lssd_job *j, uint64_t now_realtime) {
                                   lssd_identity_format(&f->id, ident, sizeof(ident)), strerror(-k));
                         continue;
                 }
+                lssd_heard_owner(&b->heard, f->node_id, &f->id);
                 if (d->node_id != f->node_id) {
                         d->node_id = f->node_id;
                         d->assigned = false;
@@ -492,6 +494,8 @@ static void autoassign_publish_one(lssd_bus *b, const lssd_job *j, const lss_out
                           lssd_identity_format(&o->id, ident, sizeof(ident)), strerror(-k));
                 return;
         }
+        if (!missing)
+                lssd_heard_owner(&b->heard, node_id, &o->id);
         if (!missing && o->new_node_id != 0 && d->node_id != o->new_node_id) {
                 d->node_id = o->new_node_id;
                 d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
@@ -555,7 +559,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (!r) {
                 b->pass_started_us = now_realtime;
                 j->plan.unstored = b->unstored;
-                lssd_taken_use_heard(b);
+                lssd_taken_check(b, false);
                 expect_finds(b);
                 int k = lss_master_autoassign(b->engine, &j->plan, lssd_bus_now(b));
                 return k < 0 ? job_start_failed(b, j, k) : 1;

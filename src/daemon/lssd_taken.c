@@ -5,17 +5,15 @@
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_taken.h"
 
-void lssd_taken_refresh(lssd_bus *b, const lss_identity *except) {
-        for (unsigned n = 0; n < 128; n++)
-                b->avoid[n] = b->heard.taken[n];
-        for (lssd_device *d = b->devices; d; d = d->next)
-                if (!d->missing && lss_node_id_valid(d->node_id) && !(except && lss_identity_equal(&d->id, except)))
-                        b->avoid[d->node_id] = true;
-        lss_master_set_known_taken(b->engine, b->avoid);
+static bool taken(void *userdata, uint8_t node_id, const lss_identity *id) {
+        lssd_bus *b = userdata;
+        return lssd_heard_taken(&b->heard, node_id, id) ||
+               (b->taken_with_devices && lssd_bus_device_with_node_id(b, node_id, id) != NULL);
 }
 
-void lssd_taken_use_heard(lssd_bus *b) {
-        lss_master_set_known_taken(b->engine, b->heard.taken);
+void lssd_taken_check(lssd_bus *b, bool with_devices) {
+        b->taken_with_devices = with_devices;
+        lss_master_set_taken_check(b->engine, taken, b);
 }
 
 int lssd_taken_error(lssd_bus *b, sd_bus_error *error, uint8_t node_id, const lss_identity *except,
@@ -25,7 +23,7 @@ int lssd_taken_error(lssd_bus *b, sd_bus_error *error, uint8_t node_id, const ls
 
         if (d)
                 snprintf(who, sizeof(who), "device %s has it", lssd_identity_format(&d->id, ident, sizeof(ident)));
-        else if (b->heard.taken[node_id])
+        else if (lssd_heard_taken(&b->heard, node_id, except))
                 snprintf(who, sizeof(who), "a device lssd does not know %s as node %u",
                          lssd_heard_describe(&b->heard, node_id, lssd_realtime_us(), heard, sizeof(heard)), node_id);
         else

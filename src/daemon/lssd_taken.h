@@ -8,14 +8,12 @@
 
 #include "daemon/lssd_bus.h"
 
-/* For one assignment or raw Configure Node-ID: b->avoid becomes every
- * node-ID heard or held by a known device other than `except` (NULL: every
- * known device), and the engine checks against it
- * (lss_master_set_known_taken). */
-void lssd_taken_refresh(lssd_bus *b, const lss_identity *except);
-/* For AutoAssign, which moves known devices itself: only what is heard,
- * live (a node-ID lssd resets while the pass runs is free again). */
-void lssd_taken_use_heard(lssd_bus *b);
+/* The engine's check for the next job (lss_master_set_taken_check): what
+ * was heard from a device other than the one to be given the node-ID, and,
+ * `with_devices`, the node-IDs of the known devices other than it
+ * (AssignNodeId, the raw Configure Node-ID). AutoAssign, which moves known
+ * devices itself, goes by what was heard alone; both are read live. */
+void lssd_taken_check(lssd_bus *b, bool with_devices);
 /* org.lssd.LSS1.Error.Conflict naming who holds node_id (a known device
  * other than `except`, what was heard from it, or the probe's answer). */
 int lssd_taken_error(lssd_bus *b, sd_bus_error *error, uint8_t node_id, const lss_identity *except,

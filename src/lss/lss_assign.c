@@ -37,7 +37,7 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
         }
 
         if ((s->taken && s->taken[s->node_id]) ||
-            ((s->flags & LSS_ASSIGN_CHECK_FREE) && m->known_taken && m->known_taken[s->node_id])) {
+            ((s->flags & LSS_ASSIGN_CHECK_FREE) && m->taken_fn && m->taken_fn(m->taken_ud, s->node_id, &s->id))) {
                 m->result.in_use = true;
                 master_fail(m, LSS_E_CONFLICT, "node-ID %u already answered on the bus", s->node_id);
                 goto out;

@@ -155,7 +155,8 @@ struct lss_master {
         lss_device *devices;
         size_t n_devices, cap_devices;
         lss_master_stats stats;
-        const bool *known_taken;  /* lss_master_set_known_taken(): 128 entries, or NULL */
+        lss_taken_fn taken_fn;    /* lss_master_set_taken_check() */
+        void *taken_ud;
         lss_progress_fn progress;
         /* a nested procedure's 0..1 is this part of the caller's: reported
          * progress = base + span * p (start_op: 0, 1) */

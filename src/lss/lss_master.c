@@ -233,7 +233,7 @@ static int proc_configure_node_id_checked(lss_master *m) {
         STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
         if (step_answered(m) && !step_conflict(m) && m->step.answer.data[1] == node_id)
                 goto configure; /* its own node-ID */
-        if (m->known_taken && m->known_taken[node_id]) {
+        if (m->taken_fn && m->taken_fn(m->taken_ud, node_id, NULL)) {
                 m->result.in_use = true;
                 master_fail(m, LSS_E_CONFLICT, "node-ID %u already answered on the bus", node_id);
                 goto out;
@@ -437,8 +437,9 @@ int lss_master_configure_node_id_checked(lss_master *m, uint8_t node_id, uint64_
         return start_op(m, proc_configure_node_id_checked, false, now);
 }
 
-void lss_master_set_known_taken(lss_master *m, const bool *taken) {
-        m->known_taken = taken;
+void lss_master_set_taken_check(lss_master *m, lss_taken_fn fn, void *userdata) {
+        m->taken_fn = fn;
+        m->taken_ud = userdata;
 }
 
 int lss_master_configure_bit_timing(lss_master *m, uint8_t table, uint8_t index, uint64_t now) {

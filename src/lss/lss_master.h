@@ -115,11 +115,14 @@ lss_master *lss_master_new(const lss_timing_config *cfg);
 void lss_master_free(lss_master *m);
 void lss_master_set_timing(lss_master *m, const lss_timing_config *cfg);
 void lss_master_set_progress(lss_master *m, lss_progress_fn fn, void *userdata);
-/* Node-IDs the caller knows other devices answer to (heard on the bus,
- * known devices): 128 entries it keeps alive and up to date, or NULL. An
- * assignment with LSS_ASSIGN_CHECK_FREE and a checked Configure Node-ID
- * refuse them before they probe. */
-void lss_master_set_known_taken(lss_master *m, const bool *taken);
+/* Whether the caller knows another device answers to node_id (heard on the
+ * bus, a known device): `id` is the slave about to be given it (NULL when
+ * not known, the raw Configure Node-ID), so that what was heard from that
+ * very slave does not count against it. */
+typedef bool (*lss_taken_fn)(void *userdata, uint8_t node_id, const lss_identity *id);
+/* An assignment with LSS_ASSIGN_CHECK_FREE and a checked Configure Node-ID
+ * refuse a node-ID `fn` says is taken before they probe; NULL: none. */
+void lss_master_set_taken_check(lss_master *m, lss_taken_fn fn, void *userdata);
 /* How many slaves an enumeration (Scan, AutoAssign) will likely find, e.g.
  * the non-configured devices seen last time: its progress is measured
  * against it (0, or more found: twice as many as found so far). */
@@ -133,7 +136,7 @@ int lss_master_configure_node_id(lss_master *m, uint8_t node_id, uint64_t now);
  * in configuration state is asked its serial (different answers: several
  * slaves would all take the node-ID, LSS_E_CONFLICT) and node-ID (already
  * the one asked for: configured again, nothing else), then node-IDs known
- * taken (lss_master_set_known_taken) and the SDO probe refuse it with
+ * taken (lss_master_set_taken_check) and the SDO probe refuse it with
  * LSS_E_CONFLICT and result.in_use. 255 (unconfigure) is never checked. */
 int lss_master_configure_node_id_checked(lss_master *m, uint8_t node_id, uint64_t now);
 int lss_master_configure_bit_timing(lss_master *m, uint8_t table, uint8_t index, uint64_t now);
@@ -177,7 +180,7 @@ int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now
 enum lss_assign_flags {
         LSS_ASSIGN_STORE = 1u << 0,  /* Store Configuration after configuring */
         LSS_ASSIGN_VERIFY = 1u << 1, /* wait for the boot-up at the new node-ID */
-        /* refuse a node-ID known taken (lss_master_set_known_taken), then ask
+        /* refuse a node-ID known taken (lss_master_set_taken_check), then ask
          * the bus whether a device already answers to it (SDO upload of
          * 0x1000); if one does: LSS_E_CONFLICT, result.in_use */
         LSS_ASSIGN_CHECK_FREE = 1u << 2,

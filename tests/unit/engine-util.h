@@ -45,6 +45,12 @@ static inline lss_slave_faults faults_latency(uint32_t latency_us, uint32_t jitt
         return f;
 }
 
+/* lss_master_set_taken_check() over a table of 128 node-IDs (userdata) */
+static inline bool taken_in_table(void *userdata, uint8_t node_id, const lss_identity *id) {
+        (void) id;
+        return ((const bool *) userdata)[node_id];
+}
+
 static inline lss_master *master_default(void) {
         lss_timing_config c;
         lss_timing_config_default(&c);

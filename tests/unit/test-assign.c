@@ -181,7 +181,7 @@ START_TEST(assign_refuses_taken_node_id) {
         ck_assert(all_waiting(b));
 
         bool taken[128] = { [7] = true };
-        lss_master_set_known_taken(m, taken);
+        lss_master_set_taken_check(m, taken_in_table, taken);
         ck_assert_int_eq(lss_master_assign(m, &ID1, 7, flags, membus_now(b)), 0);
         r = run(m, b);
         ck_assert_int_eq(r->status, LSS_E_CONFLICT);
@@ -211,7 +211,7 @@ START_TEST(configure_node_id_checked) {
         membus_add_slave(b, &third, 0xFF, NULL);
         lss_master *m = master_default();
         bool taken[128] = { [9] = true, [20] = true };
-        lss_master_set_known_taken(m, taken);
+        lss_master_set_taken_check(m, taken_in_table, taken);
         const lss_result *r;
 
         ck_assert_int_eq(lss_master_switch_selective(m, &ID1, membus_now(b)), 0);

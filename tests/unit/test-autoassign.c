@@ -174,7 +174,7 @@ START_TEST(heard_node_id_is_not_given) {
         lss_autoassign_plan p = { .map = mixed_map, .n_map = 5, .store = true };
         lss_master *m = master_default();
         bool heard[128] = { [5] = true };
-        lss_master_set_known_taken(m, heard);
+        lss_master_set_taken_check(m, taken_in_table, heard);
         ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
         ck_assert_int_eq(outcome_of(m, &A)->kind, LSS_OUTCOME_CONFLICT);
         ck_assert_uint_eq(membus_find(b, &A)->st.active_node_id, 0xFF);

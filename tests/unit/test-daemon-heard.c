@@ -62,11 +62,32 @@ START_TEST(what_frees) {
 }
 END_TEST
 
+/* What was heard at a node-ID does not count against the device lssd knows
+ * spoke there, and is forgotten once that device is found elsewhere (a
+ * device that cannot store, power-cycled back to 255: the bent-cannot-store
+ * VM test found its own old boot-up held against it). */
+START_TEST(whose_it_was) {
+        static const lss_identity x = { 0x9A, 3, 1, 0x5707 }, y = { 0x9A, 3, 1, 0x5708 };
+        lssd_heard h = { 0 };
+        lss_frame bootup = frame(0x70C, 1, 0x00);
+        lssd_heard_rx(&h, &bootup, 1);
+        ck_assert(lssd_heard_taken(&h, 12, &x) && lssd_heard_taken(&h, 12, NULL));
+        lssd_heard_owner(&h, 12, &x);
+        ck_assert(!lssd_heard_taken(&h, 12, &x));
+        ck_assert(lssd_heard_taken(&h, 12, &y));
+        ck_assert(lssd_heard_taken(&h, 12, NULL));
+        lssd_heard_owner(&h, 0xFF, &x);           /* x found non-configured */
+        ck_assert(!lssd_heard_taken(&h, 12, &y));
+        ck_assert(!h.taken[12]);
+}
+END_TEST
+
 static Suite *suite(void) {
         Suite *s = suite_create("daemon-heard");
         TCase *tc = tcase_create("core");
         tcase_add_test(tc, what_marks_taken);
         tcase_add_test(tc, what_frees);
+        tcase_add_test(tc, whose_it_was);
         suite_add_tcase(s, tc);
         return s;
 }
