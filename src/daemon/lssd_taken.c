@@ -29,6 +29,7 @@ int lssd_taken_error(lssd_bus *b, sd_bus_error *error, uint8_t node_id, const ls
         else
                 snprintf(who, sizeof(who), "a device lssd does not know answers to it");
         return sd_bus_error_setf(error, LSSD_ERROR_CONFLICT,
-                                 "%sNode-ID %u is taken on %s: %s. Nothing was changed; the option 'force' gives "
-                                 "it anyway.", prefix ? prefix : "", node_id, b->ifname, who);
+                                 "%sNode-ID %u is taken on %s: %s. Nothing was changed (to give it anyway: "
+                                 "AssignNodeId's option 'force', or ConfigureNodeId as (yb) in Execute()).",
+                                 prefix ? prefix : "", node_id, b->ifname, who);
 }
