@@ -34,9 +34,10 @@ void lssd_ready_status(lssd_context *ctx, bool ready) {
                 else if (b->boot_status)
                         n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s", b->boot_status);
         }
-        (void) sd_notifyf(0, "%sSTATUS=%s", ready ? "READY=1\n" : "", status);
+        /* the line first: whoever sees READY=1 finds it in the log already */
         if (ready)
                 log_info("Ready: %s", status);
+        (void) sd_notifyf(0, "%sSTATUS=%s", ready ? "READY=1\n" : "", status);
 }
 
 static bool boot_passes_running(const lssd_context *ctx) {
