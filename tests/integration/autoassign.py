@@ -428,6 +428,8 @@ def test_bad_config():
             expect_eq(start.returncode, 78, 'lssd exit status with the %s file (EX_CONFIG: no restart loop)' % name)
             expect(file_line(path, start.stderr + start.stdout), 'lssd on %s names file:line: %r' %
                    (name, (start.stderr + start.stdout)[-500:]))
+            expect('exiting with status 78' in start.stderr and 'Invalid argument' not in start.stderr,
+                   'lssd on %s says it exits 78 for the errors, no strerror: %r' % (name, start.stderr[-500:]))
         if env.real:
             time.sleep(0.5)
             expect_eq(env.frames('vcan0'), [], 'frames sent with bad configurations')
