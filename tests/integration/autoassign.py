@@ -306,6 +306,29 @@ def test_notify_missing_interface():
         subprocess.run(['ip', 'link', 'del', 'vcan2'], stderr=subprocess.DEVNULL)
 
 
+def test_notify_down_interface():
+    """There but down at start (systemd-networkd still bringing it up, as the
+    boot test saw): READY=1 waits for it (a few seconds here) and the pass."""
+    s = Slave(V, P, R, 0x5252)
+    cfg = config('vcan2', [(s.serial, 34)], vendor=hex(V), product=hex(P), auto_assign=True)
+    env = Env({'vcan2': [s]}, config=cfg, candump=True, notify=True, absent=('vcan2',))
+    if not env.real:
+        raise Skip('needs interfaces that come and go')
+    subprocess.run(['ip', 'link', 'del', 'vcan2'], stderr=subprocess.DEVNULL)
+    subprocess.run(['ip', 'link', 'add', 'dev', 'vcan2', 'type', 'vcan'], check=True)
+    try:
+        with env:
+            env._start_sim('vcan2', [s])
+            time.sleep(2)
+            subprocess.run(['ip', 'link', 'set', 'vcan2', 'up'], check=True)
+            ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=120, what='READY=1')
+            expect('vcan2: 1 assigned' in ready.get('STATUS', ''), 'STATUS at READY: %r' % ready.get('STATUS'))
+            expect_eq(slave_ids(env, 'vcan2', [s])[s.serial], (34, 34), 'node-ID at READY')
+            env.alive()
+    finally:
+        subprocess.run(['ip', 'link', 'del', 'vcan2'], stderr=subprocess.DEVNULL)
+
+
 # ---- a crash in the middle of a pass ----
 
 def test_crash_restart():
@@ -461,6 +484,7 @@ TESTS = {
     'encoder-mixed': test_encoder_mixed,
     'mixed': test_mixed,
     'notify-missing-interface': test_notify_missing_interface,
+    'notify-down-interface': test_notify_down_interface,
     'crash-restart': test_crash_restart,
     'interrupted-store': test_interrupted_store,
     'bad-config': test_bad_config,
