@@ -274,12 +274,20 @@ static int run(int argc, char *argv[]) {
 
         /* configuration: the last good one is what a reload falls back to */
         r = lssd_context_read_config(ctx, &config, &diag);
-        for (size_t i = 0; i < diag.n_messages; i++)
+        size_t n_errors = 0;
+        for (size_t i = 0; i < diag.n_messages; i++) {
+                n_errors += diag.messages[i].severity == LSSD_DIAG_ERROR;
                 lssd_log(diag.messages[i].severity == LSSD_DIAG_ERROR ? LOG_ERR : LOG_WARNING, "%s",
                          diag.messages[i].text);
+        }
         lssd_diag_clear(&diag);
         if (r < 0) {
-                log_error_errno(r, "Failed to load the configuration");
+                /* the file:line lines above say why; strerror(EINVAL) only confused (seen in the boot test) */
+                if (n_errors > 0)
+                        log_error("The configuration has %zu error%s (above): exiting with status 78, "
+                                  "not restarted; fix it and restart lssd", n_errors, n_errors == 1 ? "" : "s");
+                else
+                        log_error_errno(r, "Failed to load the configuration");
                 bad_config = true;
                 goto finish;
         }

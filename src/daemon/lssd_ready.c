@@ -47,6 +47,30 @@ static bool boot_passes_running(const lssd_context *ctx) {
         return false;
 }
 
+/* What holds READY=1 back: a boot pass on a bus that is up, and for the
+ * first LSSD_LINK_GRACE_USEC a bus whose interface is there but down: at
+ * boot that is systemd-networkd bringing it up (bit rate, up, then the
+ * carrier; the boot test saw lssd start in between and report READY with
+ * "waiting for can0" before the pass). A missing interface does not. */
+static bool boot_passes_hold(const lssd_context *ctx, uint64_t now) {
+        for (size_t i = 0; i < ctx->n_buses; i++) {
+                const lssd_bus *b = ctx->buses[i];
+                if (!b->boot_pending || b->removing)
+                        continue;
+                if (b->link == LSS_LINK_UP)
+                        return true;
+                if (b->link == LSS_LINK_DOWN && now - ctx->deferred_since < LSSD_LINK_GRACE_USEC)
+                        return true;
+        }
+        return false;
+}
+
+static uint64_t now_usec(const lssd_context *ctx) {
+        uint64_t now = 0;
+        (void) sd_event_now(ctx->event, CLOCK_MONOTONIC, &now);
+        return now;
+}
+
 static uint64_t boot_pass_steps(const lssd_context *ctx) {
         uint64_t steps = 0;
         for (size_t i = 0; i < ctx->n_buses; i++)
@@ -67,6 +91,10 @@ static int on_extend(sd_event_source *s, uint64_t usec, void *userdata) {
 
         if (!ctx->ready_deferred)
                 return 0;
+        if (!boot_passes_hold(ctx, usec)) { /* the grace for a bus that is down is over */
+                ready_now(ctx);
+                return 0;
+        }
         if (usec - ctx->deferred_since >= LSSD_BOOT_READY_LIMIT_USEC) {
                 log_warning("Boot auto-assignment still running after %llu s: reporting ready without it",
                             (unsigned long long) (LSSD_BOOT_READY_LIMIT_USEC / 1000000u));
@@ -86,7 +114,9 @@ static int on_extend(sd_event_source *s, uint64_t usec, void *userdata) {
 
 void lssd_ready_startup_done(lssd_context *ctx) {
         ctx->started = true;
-        if (!boot_passes_running(ctx)) {
+        uint64_t now = now_usec(ctx);
+        ctx->deferred_since = now;
+        if (!boot_passes_hold(ctx, now)) {
                 lssd_ready_status(ctx, true);
                 return;
         }
@@ -94,11 +124,11 @@ void lssd_ready_startup_done(lssd_context *ctx) {
         ctx->boot_steps = boot_pass_steps(ctx);
         (void) sd_notifyf(0, "EXTEND_TIMEOUT_USEC=%u", LSSD_EXTEND_BY_USEC);
         lssd_ready_status(ctx, false);
-        log_info("Auto-assigning before reporting ready");
-        uint64_t now;
-        if (sd_event_now(ctx->event, CLOCK_MONOTONIC, &now) < 0)
-                return;
-        ctx->deferred_since = now;
+        if (boot_passes_running(ctx))
+                log_info("Auto-assigning before reporting ready");
+        else
+                log_info("An interface is down: waiting up to %u s for it to come up before reporting ready",
+                         LSSD_LINK_GRACE_USEC / 1000000u);
         int r = sd_event_add_time(ctx->event, &ctx->extend_timer, CLOCK_MONOTONIC, now + LSSD_EXTEND_EVERY_USEC, 0,
                                   on_extend, ctx);
         if (r >= 0)
@@ -108,7 +138,7 @@ void lssd_ready_startup_done(lssd_context *ctx) {
 }
 
 void lssd_ready_boot_pass_done(lssd_context *ctx) {
-        if (ctx->ready_deferred && !boot_passes_running(ctx)) {
+        if (ctx->ready_deferred && !boot_passes_hold(ctx, now_usec(ctx))) {
                 ready_now(ctx);
                 return;
         }

@@ -309,6 +309,29 @@ def test_notify_missing_interface():
         subprocess.run(['ip', 'link', 'del', 'vcan2'], stderr=subprocess.DEVNULL)
 
 
+def test_notify_down_interface():
+    """There but down at start (systemd-networkd still bringing it up, as the
+    boot test saw): READY=1 waits for it (a few seconds here) and the pass."""
+    s = Slave(V, P, R, 0x5252)
+    cfg = config('vcan2', [(s.serial, 34)], vendor=hex(V), product=hex(P), auto_assign=True)
+    env = Env({'vcan2': [s]}, config=cfg, candump=True, notify=True, absent=('vcan2',))
+    if not env.real:
+        raise Skip('needs interfaces that come and go')
+    subprocess.run(['ip', 'link', 'del', 'vcan2'], stderr=subprocess.DEVNULL)
+    subprocess.run(['ip', 'link', 'add', 'dev', 'vcan2', 'type', 'vcan'], check=True)
+    try:
+        with env:
+            env._start_sim('vcan2', [s])
+            time.sleep(2)
+            subprocess.run(['ip', 'link', 'set', 'vcan2', 'up'], check=True)
+            ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=120, what='READY=1')
+            expect('vcan2: 1 assigned' in ready.get('STATUS', ''), 'STATUS at READY: %r' % ready.get('STATUS'))
+            expect_eq(slave_ids(env, 'vcan2', [s])[s.serial], (34, 34), 'node-ID at READY')
+            env.alive()
+    finally:
+        subprocess.run(['ip', 'link', 'del', 'vcan2'], stderr=subprocess.DEVNULL)
+
+
 # ---- a crash in the middle of a pass ----
 
 def test_crash_restart():
@@ -431,6 +454,8 @@ def test_bad_config():
             expect_eq(start.returncode, 78, 'lssd exit status with the %s file (EX_CONFIG: no restart loop)' % name)
             expect(file_line(path, start.stderr + start.stdout), 'lssd on %s names file:line: %r' %
                    (name, (start.stderr + start.stdout)[-500:]))
+            expect('exiting with status 78' in start.stderr and 'Invalid argument' not in start.stderr,
+                   'lssd on %s says it exits 78 for the errors, no strerror: %r' % (name, start.stderr[-500:]))
         if env.real:
             time.sleep(0.5)
             expect_eq(env.frames('vcan0'), [], 'frames sent with bad configurations')
@@ -462,6 +487,7 @@ TESTS = {
     'encoder-mixed': test_encoder_mixed,
     'mixed': test_mixed,
     'notify-missing-interface': test_notify_missing_interface,
+    'notify-down-interface': test_notify_down_interface,
     'crash-restart': test_crash_restart,
     'interrupted-store': test_interrupted_store,
     'bad-config': test_bad_config,
