@@ -27,6 +27,7 @@ typedef struct ctl_context {
         bool skip_missing;
         bool force;                 /* assign: even a taken node-ID */
         bool quiet;                 /* no report of what was done */
+        bool dry_run;               /* auto-assign: discovery only */
         bool has_delay;
         uint16_t delay_ms;
         bool has_vendor, has_product;

@@ -57,7 +57,8 @@ static bool outcome_is_problem(const char *outcome) {
 }
 
 static bool outcome_is_change(const char *outcome) {
-        return strcmp(outcome, "assigned") == 0 || strcmp(outcome, "pool") == 0;
+        return strcmp(outcome, "assigned") == 0 || strcmp(outcome, "pool") == 0 ||
+               strncmp(outcome, "would-", strlen("would-")) == 0;
 }
 
 /* after ^C: the job was cancelled (or still queued), lssctl exits 130 */
@@ -104,13 +105,17 @@ static int append_bool_option(sd_bus_message *m, const char *key, bool value) {
 }
 
 /* auto-assign: the count of each outcome, and each problem on stderr */
-static void print_outcome_summary(const results *res) {
+static void print_outcome_summary(const results *res, bool dry_run) {
         static const char *const kinds[] = { "assigned", "pool", "unchanged", "unknown", "missing", "conflict",
                                              "failed" };
         size_t changed = 0;
         for (size_t i = 0; i < res->n; i++)
                 changed += outcome_is_change(res->v[i].outcome);
-        printf("%zu node-ID%s assigned", changed, changed == 1 ? "" : "s");
+        if (dry_run)
+                printf("Dry run, nothing was configured: %zu node-ID%s would be assigned", changed,
+                       changed == 1 ? "" : "s");
+        else
+                printf("%zu node-ID%s assigned", changed, changed == 1 ? "" : "s");
         for (size_t k = 2; k < sizeof(kinds) / sizeof(kinds[0]); k++) {
                 size_t n = 0;
                 for (size_t i = 0; i < res->n; i++)
@@ -195,7 +200,7 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                 if (res->n > 0)
                         putchar('\n');
                 if (assignments)
-                        print_outcome_summary(res);
+                        print_outcome_summary(res, c->dry_run);
                 else
                         printf("%zu device%s found.\n", res->n, res->n == 1 ? "" : "s");
         }
@@ -233,6 +238,8 @@ static int scan_like(ctl_context *c, bool assign) {
                         r = sd_bus_message_open_container(m, 'a', "{sv}");
                 if (r >= 0 && assign && c->no_store)
                         r = append_bool_option(m, "store", false);
+                if (r >= 0 && assign && c->dry_run)
+                        r = append_bool_option(m, "dry_run", true);
                 if (r >= 0 && !assign && c->has_vendor) {
                         r = sd_bus_message_append(m, "{sv}", "vendor", "u", c->vendor);
                         if (r >= 0)
@@ -281,8 +288,9 @@ static int scan_like(ctl_context *c, bool assign) {
                 size_t bad = 0;
                 for (size_t i = 0; i < res.n; i++)
                         bad += outcome_is_problem(res.v[i].outcome);
-                r = ctl_fail(c, CTL_EXIT_PARTIAL, -EAGAIN, "The bus does not match the map: %zu mapped device%s "
-                             "missing, in conflict or failed.", bad, bad == 1 ? "" : "s");
+                r = ctl_fail(c, CTL_EXIT_PARTIAL, -EAGAIN, "The bus %s the map: %zu mapped device%s "
+                             "missing, in conflict or failed.", c->dry_run ? "would still not match" : "does not match",
+                             bad, bad == 1 ? "" : "s");
         }
 finish:
         ctl_runner_free(run);

@@ -25,6 +25,7 @@ enum {
         OPT_SKIP_MISSING = 1 << 8,
         OPT_FORCE = 1 << 9,
         OPT_QUIET = 1 << 10,
+        OPT_DRY_RUN = 1 << 11,
 };
 
 typedef struct verb {
@@ -41,7 +42,8 @@ static const verb verbs[] = {
         { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR, false, verb_scan },
         { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false,
           verb_assign },
-        { "auto-assign", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE | OPT_QUIET, false,
+        { "auto-assign", 0, 0,
+          OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE | OPT_QUIET | OPT_DRY_RUN, false,
           verb_auto_assign },
         { "set-bitrate", 1, 1, OPT_BUS | OPT_DELAY | OPT_NO_STORE | OPT_SKIP_MISSING | OPT_QUIET, false,
           verb_set_bitrate },
@@ -74,6 +76,7 @@ static void help(void) {
                "     --no-store            Do not store in the slaves (assign, auto-assign, set-bitrate)\n"
                "     --no-verify           Do not wait for the boot-up after assigning (assign)\n"
                "     --force               Give the node-ID even if another device answers to it (assign)\n"
+               "     --dry-run             Say what auto-assign would change, send nothing but discovery\n"
                "  -q --quiet               Do not say what was done (assign, auto-assign, set-bitrate, reload)\n"
                "     --delay MS            Switch delay for set-bitrate (default 100)\n"
                "     --skip-missing        set-bitrate: go ahead without mapped devices the scan misses\n"
@@ -94,6 +97,7 @@ enum {
         ARG_PRODUCT,
         ARG_SKIP_MISSING,
         ARG_FORCE,
+        ARG_DRY_RUN,
 };
 
 static const char *option_name(unsigned flag) {
@@ -109,6 +113,7 @@ static const char *option_name(unsigned flag) {
         case OPT_SKIP_MISSING: return "--skip-missing";
         case OPT_FORCE: return "--force";
         case OPT_QUIET: return "--quiet";
+        case OPT_DRY_RUN: return "--dry-run";
         default: return "?";
         }
 }
@@ -138,6 +143,7 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 { "product", required_argument, NULL, ARG_PRODUCT },
                 { "skip-missing", no_argument, NULL, ARG_SKIP_MISSING },
                 { "force", no_argument, NULL, ARG_FORCE },
+                { "dry-run", no_argument, NULL, ARG_DRY_RUN },
                 { "quiet", no_argument, NULL, 'q' },
                 {}
         };
@@ -204,6 +210,10 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 case ARG_FORCE:
                         c->force = true;
                         *given |= OPT_FORCE;
+                        break;
+                case ARG_DRY_RUN:
+                        c->dry_run = true;
+                        *given |= OPT_DRY_RUN;
                         break;
                 case 'q':
                         c->quiet = true;
@@ -291,7 +301,7 @@ int main(int argc, char *argv[]) {
                                            : ctl_usage(&c, "Too many arguments for '%s'.", v->name);
                 goto finish;
         }
-        for (unsigned flag = 1; flag <= OPT_QUIET; flag <<= 1)
+        for (unsigned flag = 1; flag <= OPT_DRY_RUN; flag <<= 1)
                 if ((given & flag) && !(v->options & flag)) {
                         r = ctl_usage(&c, "Option %s does not go with '%s'.", option_name(flag), v->name);
                         goto finish;

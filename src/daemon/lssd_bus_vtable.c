@@ -161,6 +161,7 @@ static int method_auto_assign(sd_bus_message *m, void *userdata, sd_bus_error *e
                 j->plan.store = o.store;
         if (o.has_nmt_stop)
                 j->plan.nmt_stop = o.nmt_stop;
+        j->plan.dry_run = o.dry_run;
         return submit(b, m, j, false, error);
 }
 

@@ -522,6 +522,17 @@ static void outcome_detail(const lss_outcome *o, char *buf, size_t size) {
                 snprintf(buf, size, "%s", o->message);
 }
 
+static bool outcome_changed(const lss_outcome *o) {
+        return (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL) && !o->dry;
+}
+
+/* The reply's and the journal's name: a dry run's changes are "would-..." */
+static const char *outcome_name(const lss_outcome *o) {
+        if (o->dry)
+                return o->kind == LSS_OUTCOME_POOL ? "would-pool" : "would-assign";
+        return lss_outcome_name(o->kind);
+}
+
 static void autoassign_log_one(lssd_bus *b, const lss_outcome *o) {
         char ident[40], detail[200];
         int priority = LOG_INFO;
@@ -542,12 +553,8 @@ static void autoassign_log_one(lssd_bus *b, const lss_outcome *o) {
         }
         outcome_detail(o, detail, sizeof(detail));
         lssd_log_device(priority, b->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s%s",
-                        b->ifname, ident, lss_outcome_name(o->kind), o->old_node_id, o->new_node_id,
+                        b->ifname, ident, outcome_name(o), o->old_node_id, o->new_node_id,
                         !detail[0] ? "" : o->not_stored ? ", " : ": ", detail);
-}
-
-static bool outcome_changed(const lss_outcome *o) {
-        return o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL;
 }
 
 static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
@@ -574,7 +581,15 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                            st->patient_wait_us / 1000, b->config->lss_timeout_ms);
         out = lss_master_outcomes(b->engine, &n);
         for (size_t i = 0; i < n; i++) {
-                autoassign_publish_one(b, j, &out[i], now_realtime);
+                /* what a dry run would change did not change: the device is
+                 * where it was found */
+                lss_outcome seen = out[i];
+                if (seen.dry) {
+                        seen.kind = LSS_OUTCOME_UNCHANGED;
+                        seen.new_node_id = seen.old_node_id;
+                        seen.dry = false;
+                }
+                autoassign_publish_one(b, j, &seen, now_realtime);
                 autoassign_log_one(b, &out[i]);
                 if ((unsigned) out[i].kind <= LSS_OUTCOME_FAILED)
                         count[out[i].kind]++;
@@ -593,21 +608,26 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                                                           o->id.vendor, o->id.product, o->id.revision, o->id.serial);
                 }
 
-        lssd_pass_record *rec = &b->last_pass;
+        /* a dry run is not the bus's last pass */
+        lssd_pass_record dry_rec, *rec = j->plan.dry_run ? &dry_rec : &b->last_pass;
         *rec = (lssd_pass_record) { .started_us = b->pass_started_us, .boot = b->boot_pending,
                                     .duration_us = now_realtime > b->pass_started_us ?
                                                            now_realtime - b->pass_started_us : 0 };
         for (size_t i = 0; i <= LSS_OUTCOME_FAILED; i++)
                 rec->counts[i] = (uint32_t) count[i];
-        snprintf(rec->result, sizeof(rec->result), "%s",
-                 r->status != LSS_OK ? lssd_status_to_result(r->status)
-                 : count[LSS_OUTCOME_MISSING] + count[LSS_OUTCOME_CONFLICT] + count[LSS_OUTCOME_FAILED] > 0 ? "partial"
-                 : "done");
-        b->changed |= LSSD_BUS_CHANGED_LAST_PASS;
+        /* the bus matches the map only when every mapped device has its node-ID */
+        const char *verdict = r->status != LSS_OK ? lssd_status_to_result(r->status)
+                              : count[LSS_OUTCOME_MISSING] + count[LSS_OUTCOME_CONFLICT] + count[LSS_OUTCOME_FAILED] > 0
+                                      ? "partial"
+                                      : "done";
+        snprintf(rec->result, sizeof(rec->result), "%s", verdict);
+        if (!j->plan.dry_run)
+                b->changed |= LSSD_BUS_CHANGED_LAST_PASS;
 
         snprintf(j->summary, sizeof(j->summary),
-                 "%s: %zu assigned, %zu from the pool, %zu unchanged, %zu unknown, %zu missing, %zu conflicts, "
-                 "%zu failed", b->ifname, count[LSS_OUTCOME_ASSIGNED], count[LSS_OUTCOME_POOL],
+                 "%s: %zu %sassigned, %zu from the pool, %zu unchanged, %zu unknown, %zu missing, %zu conflicts, "
+                 "%zu failed", b->ifname, count[LSS_OUTCOME_ASSIGNED], j->plan.dry_run ? "would be " : "",
+                 count[LSS_OUTCOME_POOL],
                  count[LSS_OUTCOME_UNCHANGED], count[LSS_OUTCOME_UNKNOWN], count[LSS_OUTCOME_MISSING],
                  count[LSS_OUTCOME_CONFLICT], count[LSS_OUTCOME_FAILED]);
 
@@ -622,9 +642,9 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 return 0;
         }
 
-        log_notice("AutoAssign on %s", j->summary);
-        /* the bus matches the map only when every mapped device has its node-ID */
-        j->result = rec->result;
+        log_notice("AutoAssign%s on %s", j->plan.dry_run ? " (dry run: nothing was sent but discovery)" : "",
+                   j->summary);
+        j->result = verdict;
 
         if (!j->request)
                 return 0;
@@ -637,8 +657,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 char detail[200];
                 outcome_detail(o, detail, sizeof(detail));
                 k = sd_bus_message_append(reply, "(uuuuyyss)", o->id.vendor, o->id.product, o->id.revision,
-                                          o->id.serial, o->old_node_id, o->new_node_id, lss_outcome_name(o->kind),
-                                          detail);
+                                          o->id.serial, o->old_node_id, o->new_node_id, outcome_name(o), detail);
         }
         if (k >= 0)
                 k = sd_bus_message_close_container(reply);

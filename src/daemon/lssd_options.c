@@ -148,6 +148,7 @@ int lssd_assign_options_read(sd_bus_message *m, lssd_assign_options *ret, sd_bus
 static const lssd_option autoassign_table[] = {
         LSSD_OPTION_SEEN("store", 'b', lssd_autoassign_options, store, has_store),
         LSSD_OPTION_SEEN("nmt_stop", 'b', lssd_autoassign_options, nmt_stop, has_nmt_stop),
+        LSSD_OPTION("dry_run", 'b', lssd_autoassign_options, dry_run),
         LSSD_OPTION_END,
 };
 

@@ -59,6 +59,7 @@ typedef struct lssd_fastscan_options {
 typedef struct lssd_autoassign_options {
         bool store, nmt_stop;
         bool has_store, has_nmt_stop;
+        bool dry_run;              /* discovery only: what a pass would do */
 } lssd_autoassign_options;
 
 int lssd_scan_options_read(sd_bus_message *m, lssd_scan_options *ret, sd_bus_error *error);

@@ -30,6 +30,8 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                  * maybe not stored, taken when the slave went back to waiting. */
                 if ((s->flags & LSS_ASSIGN_STORE) && s->unstored && s->unstored[s->node_id]) {
                         m->result.changed = true;
+                        if (s->flags & LSS_ASSIGN_DRY_RUN)
+                                goto dry;
                         goto store;
                 }
                 SEND(m, &s->tail_pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
@@ -52,6 +54,10 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                 }
         }
 
+        if (s->flags & LSS_ASSIGN_DRY_RUN) {
+                m->result.changed = true;
+                goto dry;
+        }
         REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_configure_node_id(&f__, s->node_id),
                         LSS_CS_CONFIGURE_NODE_ID);
         if (!step_answered(m)) {
@@ -110,6 +116,10 @@ store:
         else if (step_conflict(m))
                 master_fail(m, LSS_E_CONFLICT, "more than one device booted up as node %u (duplicate identity?)",
                             s->node_id);
+        goto out;
+dry:
+        m->result.dry = true;
+        SEND(m, &s->tail_pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
 out:;
         PT_END(&s->tail_pc);
 }
@@ -121,7 +131,7 @@ static void identity_of_scan(lss_assign_state *s) {
 
 /* Each assignment reports only on itself (a pass runs many). */
 static void result_reset(lss_master *m) {
-        m->result.changed = m->result.in_use = m->result.not_stored = false;
+        m->result.changed = m->result.in_use = m->result.not_stored = m->result.dry = false;
         m->result.err = m->result.spec = 0;
         m->result.node_id = LSS_NODE_ID_UNCONFIGURED;
 }

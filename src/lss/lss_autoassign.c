@@ -141,6 +141,7 @@ static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool 
                 o->new_node_id = s->target;
                 o->not_stored = r->not_stored;
                 o->err = r->err;
+                o->dry = r->dry && r->changed;
                 s->used[s->target] = true;
         } else if (r->status == LSS_E_NOT_FOUND) {
                 o->kind = LSS_OUTCOME_MISSING;
@@ -177,7 +178,13 @@ static void enumeration_failed(lss_aa_state *s, lss_master *m) {
 }
 
 static unsigned assign_flags(const lss_aa_state *s) {
-        return LSS_ASSIGN_VERIFY | LSS_ASSIGN_CHECK_FREE | (s->plan->store ? LSS_ASSIGN_STORE : 0);
+        return LSS_ASSIGN_VERIFY | LSS_ASSIGN_CHECK_FREE | (s->plan->store ? LSS_ASSIGN_STORE : 0) |
+               (s->plan->dry_run ? LSS_ASSIGN_DRY_RUN : 0);
+}
+
+/* NMT Stop is sent (nmt_stop, and not a dry run) */
+static bool stops(const lss_aa_state *s) {
+        return s->plan->nmt_stop && !s->plan->dry_run;
 }
 
 /* Handle the devices in `todo` (full identities, found by a scan). */
@@ -215,7 +222,7 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                         m->as.id = s->todo[s->t].id;
                         m->as.node_id = s->target;
                         m->as.flags = assign_flags(s);
-                        m->as.taken = s->plan->nmt_stop ? s->taken : NULL;
+                        m->as.taken = stops(s) ? s->taken : NULL;
                         m->as.unstored = s->plan->unstored;
                         PT_CALL(&s->i_pc, proc_assign(m, &m->as));
                         /* a pool ID somebody already answers to: take the next one */
@@ -232,7 +239,7 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                 }
                 s->changed = m->result.changed;
                 record(m, s, &s->todo[s->t].id, s->entry < 0);
-                if (s->changed && s->plan->nmt_stop) {
+                if (s->changed && stops(s)) {
                         /* the verifying reset took them out of Stopped */
                         STEP_REQUEST(m, &s->i_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
                 }
@@ -254,14 +261,14 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                 m->as.id = s->plan->map[s->i].id;
                 m->as.node_id = s->target;
                 m->as.flags = assign_flags(s);
-                m->as.taken = s->plan->nmt_stop ? s->taken : NULL;
+                m->as.taken = stops(s) ? s->taken : NULL;
                 m->as.unstored = s->plan->unstored;
                 PT_CALL(&s->d_pc, proc_assign(m, &m->as));
                 if (m->result.status != LSS_E_NOT_FOUND) {
                         s->handled[s->i] = true;
                         s->changed = m->result.changed;
                         record(m, s, &s->plan->map[s->i].id, false);
-                        if (s->changed && s->plan->nmt_stop) {
+                        if (s->changed && stops(s)) {
                                 /* the verifying reset took them out of Stopped */
                                 STEP_REQUEST(m, &s->d_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
                         }
@@ -324,7 +331,7 @@ int proc_autoassign(lss_master *m) {
         for (size_t i = 0; i < s->plan->n_map; i++)
                 s->used[s->plan->map[i].node_id] = true;
 
-        if (s->plan->nmt_stop) {
+        if (stops(s)) {
                 /* Stopped devices do not answer SDO: learn which mapped
                  * node-IDs are taken while they still can. */
                 for (s->i = 0; s->i < s->plan->n_map; s->i++) {
@@ -363,7 +370,8 @@ int proc_autoassign(lss_master *m) {
                 for (unsigned id = 0; id < 128; id++)
                         s->avoid[id] = s->used[id] || s->taken[id];
                 m->sc.avoid = s->avoid;
-                m->sc.keep_stopped = s->plan->nmt_stop;
+                m->sc.keep_stopped = stops(s);
+                m->sc.no_set_aside = s->plan->dry_run;
                 m->sc.pc = m->sc.vpc = 0;
                 PT_CALL(&s->pc, proc_enumerate(m, &m->sc));
                 if (m->cancelling)
@@ -400,7 +408,7 @@ int proc_autoassign(lss_master *m) {
                 m->timing.cfg.guard_floor_us = m->stats.patient_wait_us / 4;
                 m->timing.cfg.adaptive = false;
                 s->patient = true;
-                if (s->plan->nmt_stop) {
+                if (stops(s)) {
                         STEP_REQUEST(m, &s->pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
                         m->step = (lss_step) { .kind = STEP_DELAY, .wait_us = 20000 };
                         step_start(m);

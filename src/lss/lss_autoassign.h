@@ -39,6 +39,9 @@ typedef struct lss_autoassign_plan {
         uint8_t pool_lo, pool_hi; /* for LSS_UNKNOWN_POOL */
         bool store;
         bool nmt_stop;
+        /* discovery only: no Configure, Store or NMT frame; the outcomes
+         * say what a pass would do (lss_outcome.dry) */
+        bool dry_run;
         /* 128 entries or NULL, may change while the pass runs: node-IDs a
          * device took from a pending ID that an interrupted pass configured
          * and may not have stored; a device found with its mapped node-ID
@@ -64,6 +67,7 @@ typedef struct lss_outcome {
         uint8_t new_node_id; /* what it has now (0 if missing) */
         enum lss_outcome_kind kind;
         bool not_stored;     /* assigned/pool, but the device cannot store (err: its Store Configuration error) */
+        bool dry;            /* assigned/pool: would be, in a dry run (nothing was sent) */
         uint8_t err;
         enum lss_status status;
         char message[160];

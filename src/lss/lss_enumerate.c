@@ -275,7 +275,10 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                  * Fastscan with a node-ID): keep it in configuration. Found
                  * there too, it answers in every state. */
                 if (kept(s->again) || s->node == LSS_NODE_ID_UNCONFIGURED) {
-                        misbehaving(m, s, &s->found, "answered Fastscan again after it was set aside");
+                        misbehaving(m, s, &s->found, s->no_set_aside
+                                    ? "answers Fastscan in configuration state (a dry run sets nobody aside "
+                                      "with a temporary node-ID, which such a slave needs)"
+                                    : "answered Fastscan again after it was set aside");
                         goto out;
                 }
                 s->again->node_id = s->node;
@@ -289,8 +292,18 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
         if (s->confirm == CONFIRM_NOBODY) {
                 /* nobody in configuration: the identity was made of answers
                  * to requests that matched nobody */
-                if (s->phantoms++ > 0 && (lss_identity_equal(&s->found, &s->phantom) ||
-                                          s->phantoms > m->timing.cfg.retries)) {
+                if (s->phantoms++ > 0 && s->no_set_aside && s->n_kept > 0) {
+                        /* slaves kept in configuration answered too: name a
+                         * confirmed one, never the made-up identity */
+                        m->result.id = s->cand[s->n_cand - 1].id;
+                        s->misbehaving = true;
+                        master_fail(m, LSS_E_CONFLICT, "slaves answer Fastscan in configuration state (like "
+                                    "CANopenNode): a dry run sets nobody aside with a temporary node-ID, which "
+                                    "such slaves need, so it stopped after %zu found", s->n_cand);
+                        goto out;
+                }
+                if (s->phantoms > 1 && (lss_identity_equal(&s->found, &s->phantom) ||
+                                        s->phantoms > m->timing.cfg.retries)) {
                         m->result.id = s->found;
                         s->misbehaving = true;
                         master_fail(m, LSS_E_CONFLICT,
@@ -309,6 +322,14 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                         goto out;
                 }
                 s->cand[s->n_cand - 1].node_id = s->node;
+                s->n_kept++;
+        } else if (s->no_set_aside) {
+                /* a dry run configures nothing, not even a temporary node-ID */
+                if (cand_add(s, &s->found) < 0) {
+                        master_fail(m, LSS_E_INCOMPLETE, "out of memory");
+                        goto out;
+                }
+                s->cand[s->n_cand - 1].node_id = LSS_NODE_ID_UNCONFIGURED;
                 s->n_kept++;
         } else {
                 s->apc = 0;

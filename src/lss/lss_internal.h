@@ -87,6 +87,8 @@ typedef struct lss_scan_state {
         unsigned rounds, phantoms, n_kept, n_aside, field, stuck;
         bool restore;           /* slaves are set aside: a cancel waits for their give-back */
         bool keep_stopped;      /* the caller stopped every device: keep those set aside stopped */
+        bool no_set_aside;      /* a dry run: found non-configured slaves stay in configuration
+                                 * (CiA 305: they take no part); one that answers again ends the pass */
         lss_device *again;      /* the candidate a round found a second time */
         bool back_due[128];     /* by temporary node-ID: set aside, not yet seen back at 255 */
         double prog_base0, prog_span0; /* the caller's progress frame */

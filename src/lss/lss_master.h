@@ -88,7 +88,8 @@ typedef struct lss_result {
         bool found;          /* identify services, selective switch */
         uint32_t value;      /* inquire */
         uint8_t node_id;     /* inquire node-ID; assign: old node-ID */
-        bool changed;        /* assign: something was configured */
+        bool changed;        /* assign: something was configured (dry: would be) */
+        bool dry;            /* assign: LSS_ASSIGN_DRY_RUN, nothing was configured */
         bool in_use;         /* assign: the node-ID already answers on the bus */
         bool not_stored;     /* assign: configured and verified, but the slave cannot store
                               * (Store Configuration error 1 or 2 in err): volatile until a power cycle */
@@ -184,6 +185,9 @@ enum lss_assign_flags {
          * the bus whether a device already answers to it (SDO upload of
          * 0x1000); if one does: LSS_E_CONFLICT, result.in_use */
         LSS_ASSIGN_CHECK_FREE = 1u << 2,
+        /* everything up to the check that the node-ID is free, then back to
+         * waiting: result.changed says whether it would configure */
+        LSS_ASSIGN_DRY_RUN = 1u << 3,
 };
 /* Give the slave with this identity a node-ID: selective switch, inquire the
  * node-ID (nothing is sent if it already has it), configure, store, back to

@@ -357,6 +357,32 @@ def test_auto_assign():
         expect_eq((d['node_id'], d['state']), (5, 'assigned'), 'after auto-assign')
 
 
+def test_auto_assign_dry_run():
+    """auto-assign --dry-run (issue 21): what a pass would change, with no
+    Configure, Store or NMT frame on the wire; the pass after it does it."""
+    with Env({'vcan0': SLAVES}, config=CONFIG % '', candump=True) as env:
+        ctl = Ctl(env)
+        r = ctl.ok('auto-assign', '--dry-run')
+        expect_eq(r.out.strip().splitlines()[-1],
+                  'Dry run, nothing was configured: 1 node-ID would be assigned, 2 unchanged, 1 unknown.',
+                  'the dry run\'s count: %r' % r.out)
+        expect('would-assign' in r.out, 'the table names what would change: %r' % r.out)
+        got = ctl.ok('auto-assign', '--dry-run', '--json').json
+        expect_eq(sorted((x['serial'], x['outcome']) for x in got),
+                  [(17, 'unchanged'), (0x1276, 'would-assign'), (0x80002468, 'unchanged'), (0xFFFFFFFF, 'unknown')],
+                  'dry run --json')
+        d = [x for x in ctl.ok('list', '--json').json if x['serial'] == 0x1276][0]
+        expect_eq(d['node_id'], 255, 'the device after the dry run')
+        expect_eq(ctl.ok('status', '--json').json['buses'][0]['last_pass'], None, 'a dry run is no pass')
+        if env.real:
+            expect_eq(env.slave_state('vcan0', 0x1276)['active_node_id'], '255', 'the slave after the dry run')
+            changing = [f for f in env.frames('vcan0') if f[1] == 0 or
+                        (f[1] == 0x7E5 and f[2][0] in (0x11, 0x13, 0x15, 0x17))]
+            expect_eq(changing, [], 'Configure, Store or NMT frames of the dry runs')
+        got = ctl.ok('auto-assign', '--json').json
+        expect_eq([x['outcome'] for x in got if x['serial'] == 0x1276], ['assigned'], 'the pass after the dry run')
+
+
 def test_assign_taken():
     """No path gives a node-ID another device answers to (issue 17): not the
     known devices', not one lssd does not know (SDO probe), not one it heard
@@ -783,6 +809,7 @@ TESTS = {
     'scan-two-buses': test_scan_two_buses,
     'assign': test_assign,
     'assign-taken': test_assign_taken,
+    'auto-assign-dry-run': test_auto_assign_dry_run,
     'auto-assign': test_auto_assign,
     'auto-assign-partial': test_auto_assign_partial,
     'set-bitrate': test_set_bitrate,

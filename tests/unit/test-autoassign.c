@@ -185,6 +185,53 @@ START_TEST(heard_node_id_is_not_given) {
 }
 END_TEST
 
+/* A dry run sends discovery only (no Configure, Store or NMT frame) and
+ * says what a pass would do; the pass after it does exactly that. */
+typedef struct dry_count {
+        unsigned configure, store, nmt;
+} dry_count;
+
+static void count_dry(void *ud, const lss_frame *f, uint64_t t) {
+        dry_count *c = ud;
+        if (lss_is_request(f)) {
+                c->configure += f->data[0] == LSS_CS_CONFIGURE_NODE_ID || f->data[0] == LSS_CS_CONFIGURE_BIT_TIMING;
+                c->store += f->data[0] == LSS_CS_STORE;
+        }
+        c->nmt += f->id == 0;
+}
+
+START_TEST(dry_run_sends_nothing_that_changes) {
+        for (int pool = 0; pool < 2; pool++) {
+                membus *b = mixed_bus();
+                lss_autoassign_plan p = { .map = mixed_map, .n_map = 5, .store = true, .nmt_stop = true,
+                                          .unknown = pool ? LSS_UNKNOWN_POOL : LSS_UNKNOWN_IGNORE,
+                                          .pool_lo = 10, .pool_hi = 12, .dry_run = true };
+                lss_master *m = master_default();
+                dry_count c = { 0 };
+                membus_set_trace(b, count_dry, &c);
+                ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+                ck_assert_uint_eq(c.configure, 0);
+                ck_assert_uint_eq(c.store, 0);
+                ck_assert_uint_eq(c.nmt, 0);
+                ck_assert_int_eq(outcome_of(m, &A)->kind, LSS_OUTCOME_ASSIGNED);
+                ck_assert(outcome_of(m, &A)->dry);
+                ck_assert_int_eq(outcome_of(m, &B)->kind, LSS_OUTCOME_ASSIGNED);
+                ck_assert(outcome_of(m, &B)->dry);
+                ck_assert_int_eq(outcome_of(m, &C)->kind, LSS_OUTCOME_UNCHANGED);
+                ck_assert_int_eq(outcome_of(m, &D)->kind, LSS_OUTCOME_MISSING);
+                ck_assert_int_eq(outcome_of(m, &E)->kind, LSS_OUTCOME_CONFLICT);
+                ck_assert_int_eq(outcome_of(m, &U)->kind, pool ? LSS_OUTCOME_POOL : LSS_OUTCOME_UNKNOWN);
+                ck_assert_uint_eq(membus_find(b, &A)->st.active_node_id, 0xFF);
+                ck_assert_uint_eq(membus_find(b, &A)->st.pending_node_id, 0xFF);
+                ck_assert_uint_eq(membus_find(b, &B)->st.active_node_id, 40);
+                ck_assert_uint_eq(membus_find(b, &U)->st.pending_node_id, 0xFF);
+                ck_assert(all_waiting(b));
+                lss_master_free(m);
+                membus_free(b);
+        }
+}
+END_TEST
+
 START_TEST(mixed_bus_pool) {
         membus *b = mixed_bus();
         lss_autoassign_plan p = { .map = mixed_map, .n_map = 5, .store = true, .unknown = LSS_UNKNOWN_POOL,
@@ -331,6 +378,7 @@ int main(void) {
         tcase_add_test(tc, mixed_bus_ignore);
         tcase_add_test(tc, mixed_bus_pool);
         tcase_add_test(tc, heard_node_id_is_not_given);
+        tcase_add_test(tc, dry_run_sends_nothing_that_changes);
         tcase_add_test(tc, late_confirmation_is_not_lost);
         tcase_add_test(tc, bad_plans);
         tcase_add_test(tc, cancel_leaves_waiting);

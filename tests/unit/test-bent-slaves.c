@@ -4,6 +4,7 @@
  * devices that cannot store): every pass ends, nothing unconfirmed is
  * reported, and Scan leaves the bus as it found it. */
 #include <stdio.h>
+#include <string.h>
 
 #include "engine-util.h"
 #include "lss/lss_autoassign.h"
@@ -47,6 +48,32 @@ START_TEST(scan_canopennode) {
                 assert_untouched(b, i);
                 ck_assert_uint_ge(r->devices[i].aside_node_id, 1);
         }
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* A dry run sets nobody aside: on CANopenNode slaves it ends, naming the
+ * slave that answered again and why, and nothing on the bus changed. */
+START_TEST(dry_run_canopennode) {
+        lss_slave_faults f = canopennode();
+        membus *b = bus_random(3, 904, 0, 0, &f);
+        lss_autoassign_plan p = { .unknown = LSS_UNKNOWN_POOL, .pool_lo = 20, .pool_hi = 40, .store = true,
+                                  .dry_run = true };
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_autoassign(m, &p, membus_now(b)), 0);
+        const lss_result *r = lss_drive(m, b, 120 * SECOND, NULL, NULL);
+        ck_assert_int_eq(r->status, LSS_E_CONFLICT);
+        ck_assert_msg(strstr(r->message, "a dry run sets nobody aside"), "%s", r->message);
+        for (size_t i = 0; i < 3; i++)
+                assert_untouched(b, i);
+        /* the failed outcome names a real slave */
+        size_t n, real = 0;
+        const lss_outcome *o = lss_master_outcomes(m, &n);
+        for (size_t i = 0; i < n; i++)
+                for (size_t k = 0; k < 3; k++)
+                        real += lss_identity_equal(&o[i].id, &membus_slave(b, k)->id);
+        ck_assert_uint_eq(real, n);
         lss_master_free(m);
         membus_free(b);
 }
@@ -231,6 +258,7 @@ int main(void) {
         tcase_set_timeout(tc, 120);
         tcase_add_test(tc, scan_canopennode);
         tcase_add_test(tc, autoassign_canopennode);
+        tcase_add_test(tc, dry_run_canopennode);
         tcase_add_test(tc, fastscan_any_is_named);
         tcase_add_test(tc, raw_fastscan_confirmed);
         tcase_add_test(tc, cannot_store);
