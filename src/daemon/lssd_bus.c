@@ -63,19 +63,17 @@ lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c) {
 }
 
 /* The engine's timing for a bus. lss_timeout_ms is the no-answer wait of
- * first contacts and the cap of the adaptive wait; the adaptive wait never
- * drops below half of it, and the guards never below a twentieth: answers
- * from slaves on a loaded host come with milliseconds of jitter, and a wait
- * cut to the measured latency would take a late answer for silence. Frame
- * times count at the bus's bit rate, except on virtual interfaces, whose
- * frames arrive the moment they are sent. */
+ * first contacts and the cap of the adaptive wait until late answers make
+ * the engine patient (docs/engine.md); the adaptive wait follows the
+ * measured latency with no floor of its own (a silence taken too early
+ * costs a retry, never a wrong result), the guards never go below a
+ * twentieth of the timeout. Frame times count at the bus's bit rate, except
+ * on virtual interfaces, whose frames arrive the moment they are sent. */
 static void bus_timing(const lssd_bus *b, lss_timing_config *tc) {
         const lssd_bus_config *c = b->config;
         lss_timing_config_default(tc);
         tc->timeout_us = c->lss_timeout_ms * 1000u;
         tc->adaptive = c->lss_timing == LSSD_LSS_TIMING_ADAPTIVE;
-        if (tc->floor_us < tc->timeout_us / 2)
-                tc->floor_us = tc->timeout_us / 2;
         if (tc->guard_floor_us < tc->timeout_us / 20)
                 tc->guard_floor_us = tc->timeout_us / 20;
         tc->bitrate = b->link_virtual ? 0 : lssd_bus_bitrate(b);
@@ -262,6 +260,11 @@ static void bus_job_end(lssd_bus *b) {
                   j->result ? j->result : "failed", st->steps, st->retries, st->timeouts, st->late_answers,
                   st->stale_frames, st->ignored_frames, st->conflicts, st->timeout_us, st->latency_min_us,
                   st->latency_max_us);
+        if (st->patience_us)
+                log_notice("%s: devices answered later than lss_timeout_ms = %u allows (%" PRIu64
+                           " late, %" PRIu64 " after their step had ended): waited up to %u ms",
+                           b->ifname, b->config->lss_timeout_ms, st->late_answers, st->stray_answers,
+                           (st->patience_us + 999) / 1000);
         b->job = NULL;
         b->changed |= LSSD_BUS_CHANGED_JOB;
         set_progress(b, 0);

@@ -178,6 +178,12 @@ void step_selective(lss_master *m, const lss_identity *id);
 /* SDO upload of 0x1000 to node_id: answered means the node-ID is taken. */
 void step_node_in_use(lss_master *m, uint8_t node_id);
 void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx);
+void step_on_stray(lss_master *m, const lss_frame *f);
+/* keep the operation's peak patience in the stats */
+static inline void note_patience(lss_master *m) {
+        if (m->timing.patience_us > m->stats.patience_us)
+                m->stats.patience_us = m->timing.patience_us;
+}
 void step_on_time(lss_master *m, uint64_t now);
 uint64_t step_deadline(const lss_master *m);
 bool step_answered(const lss_master *m);

@@ -56,6 +56,7 @@ void lss_master_set_timing(lss_master *m, const lss_timing_config *cfg) {
         memcpy(m->timing.samples, t.samples, sizeof(t.samples));
         m->timing.n_samples = t.n_samples;
         m->timing.next = t.next;
+        m->timing.patience_us = t.patience_us;
 }
 
 void lss_master_set_progress(lss_master *m, lss_progress_fn fn, void *userdata) {
@@ -158,6 +159,7 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
         m->step.phase = PHASE_IDLE;
         m->prog_base = 0;
         m->prog_span = 1;
+        m->stats.patience_us = m->timing.patience_us;
         advance(m);
         return 0;
 }
@@ -595,6 +597,7 @@ void lss_master_on_frame(lss_master *m, const lss_frame *f, uint64_t rx_us) {
                 m->now = rx_us;
         if (!m->running) {
                 m->stats.ignored_frames++;
+                step_on_stray(m, f);
                 return;
         }
         step_on_frame(m, f, rx_us);

@@ -101,6 +101,9 @@ typedef struct lss_result {
 
 typedef struct lss_master_stats {
         uint64_t steps, retries, timeouts, late_answers, ignored_frames, stale_frames, conflicts;
+        uint64_t stray_answers;                  /* LSS answers that came after their step had ended */
+        uint32_t patience_us;                    /* the operation's longest wait beyond the configured
+                                                    timeout that late answers called for (0: none) */
         uint32_t latency_min_us, latency_max_us; /* recent answer latency window */
         uint32_t timeout_us;                     /* the no-answer wait in force now */
         uint32_t patient_wait_us;                /* AutoAssign looked again for mapped devices it had

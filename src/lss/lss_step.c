@@ -86,11 +86,22 @@ static bool step_matches(const lss_step *s, const lss_frame *f) {
         return s->kind == STEP_LSS && lss_is_response(f) && f->data[0] == (uint8_t) s->expect_cs;
 }
 
+/* An LSS answer that came when no step could take it was late for its own
+ * step: the slaves or the host are slower than the waits. */
+void step_on_stray(lss_master *m, const lss_frame *f) {
+        if (!lss_is_response(f))
+                return;
+        m->stats.stray_answers++;
+        lss_timing_on_stray(&m->timing);
+        note_patience(m);
+}
+
 void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
         lss_step *s = &m->step;
 
         if (s->phase != PHASE_WAIT && s->phase != PHASE_ANSWER_GUARD && s->phase != PHASE_LATE_GUARD) {
                 m->stats.ignored_frames++;
+                step_on_stray(m, f);
                 return;
         }
         /* A slave answers only after the whole request is on the wire: anything
@@ -102,23 +113,28 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
         if (s->needs_echo) {
                 if (!s->confirmed) {
                         m->stats.stale_frames++;
+                        step_on_stray(m, f);
                         return;
                 }
         } else if (rx < s->sent_at + (s->kind == STEP_LSS ? s->tx_us : 0)) {
                 m->stats.stale_frames++;
+                step_on_stray(m, f);
                 return;
         }
         if (!step_matches(s, f)) {
                 m->stats.ignored_frames++;
+                step_on_stray(m, f);
                 return;
         }
         if (s->n_answers == 0) {
                 /* the first answer decides the step: its latency is what the wait is for */
                 /* (an rx time may read a little before the echo's: count 0) */
-                if (s->kind == STEP_LSS)
-                        lss_timing_add_sample(&m->timing, rx > s->sent_at + s->tx_us
-                                                                  ? (uint32_t) (rx - s->sent_at - s->tx_us)
-                                                                  : 0);
+                if (s->kind == STEP_LSS) {
+                        uint32_t latency = rx > s->sent_at + s->tx_us ? (uint32_t) (rx - s->sent_at - s->tx_us) : 0;
+                        lss_timing_add_sample(&m->timing, latency);
+                        lss_timing_on_answer(&m->timing, latency, s->phase == PHASE_LATE_GUARD && s->discovery);
+                        note_patience(m);
+                }
                 s->answer = *f;
                 s->n_answers = 1;
                 s->first_at = rx;

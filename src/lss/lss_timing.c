@@ -48,17 +48,54 @@ uint32_t lss_timing_min(const lss_timing *t) {
         return t->n_samples ? m : 0;
 }
 
-uint32_t lss_timing_wait(const lss_timing *t, bool discovery) {
+uint32_t lss_timing_limit(const lss_timing *t) {
+        return t->patience_us > t->cfg.timeout_us ? t->patience_us : t->cfg.timeout_us;
+}
+
+static uint32_t wait_up_to(const lss_timing *t, bool discovery, uint32_t limit) {
         if (!t->cfg.adaptive || discovery || t->n_samples == 0)
-                return t->cfg.timeout_us;
+                return limit;
         uint64_t w = (uint64_t) lss_timing_max(t) * t->cfg.factor_pct / 100;
         if (w < t->cfg.floor_us)
                 w = t->cfg.floor_us;
-        /* the configured timeout caps it: a stray frame taken for a very late
-         * answer must not make every later wait longer and longer */
-        if (w > t->cfg.timeout_us)
-                w = t->cfg.timeout_us;
+        /* the limit caps it: a stray frame taken for a very late answer must
+         * not make every later wait longer and longer */
+        if (w > limit)
+                w = limit;
         return (uint32_t) w;
+}
+
+uint32_t lss_timing_wait(const lss_timing *t, bool discovery) {
+        return wait_up_to(t, discovery, lss_timing_limit(t));
+}
+
+static void set_patience(lss_timing *t, uint64_t p) {
+        if (p > LSS_PATIENCE_MAX_US)
+                p = LSS_PATIENCE_MAX_US;
+        t->patience_us = p > t->cfg.timeout_us ? (uint32_t) p : 0;
+}
+
+/* Each late answer lengthens the limit, and the next late answer comes after
+ * the longer limit: without a cap, answers that are not what they seem (a
+ * frame of another master, a fault) would grow it step by step. */
+static uint64_t patience_cap(const lss_timing *t) {
+        return (uint64_t) LSS_PATIENCE_FACTOR * t->cfg.timeout_us;
+}
+
+void lss_timing_on_answer(lss_timing *t, uint32_t latency_us, bool late) {
+        if (late) {
+                uint64_t p = (uint64_t) latency_us * 3 / 2;
+                if (p > patience_cap(t))
+                        p = patience_cap(t);
+                if (p > t->patience_us)
+                        set_patience(t, p);
+        } else if (latency_us <= t->cfg.timeout_us)
+                set_patience(t, t->patience_us - t->patience_us / 4);
+}
+
+void lss_timing_on_stray(lss_timing *t) {
+        uint64_t p = 2ull * lss_timing_limit(t);
+        set_patience(t, p < patience_cap(t) ? p : patience_cap(t));
 }
 
 /* Worst-case time of an 8-byte standard frame: 135 bits with stuffing. */
@@ -73,7 +110,8 @@ uint32_t lss_timing_answer_guard(const lss_timing *t) {
 }
 
 uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery) {
-        uint32_t g = lss_timing_wait(t, discovery) / 4;
+        /* patience lengthens the wait, not this */
+        uint32_t g = wait_up_to(t, discovery, t->cfg.timeout_us) / 4;
         return g > t->cfg.guard_floor_us ? g : t->cfg.guard_floor_us;
 }
 

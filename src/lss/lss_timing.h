@@ -3,14 +3,24 @@
  * request on the wire to the arrival of the answer; the window of recent
  * samples gives the worst (max) and best (min) latency seen on this bus.
  *
- *   wait (no answer)   fixed: timeout;
- *                      adaptive: min(timeout, max(floor, factor * max))
- *                      (timeout until the first answer was measured)
+ *   limit              max(timeout, patience): the longest no-answer wait
+ *   wait (no answer)   fixed: limit;
+ *                      adaptive: min(limit, max(floor, factor * max))
+ *                      (limit until the first answer was measured)
  *   answer guard       after the first answer: max(guard_floor, max - min)
  *                      + one answer frame (a second responder's answer
  *                      queues behind the first on the wire)
- *   late guard         after a wait ran out: max(guard_floor, wait / 4);
- *                      an answer in it still counts and raises `max`
+ *   late guard         after a wait ran out: max(guard_floor, wait / 4),
+ *                      the wait taken without patience. An answer in it
+ *                      still counts and raises `max`.
+ *   patience           0 while answers come within timeout. A late answer
+ *                      to a discovery step raises it to 1.5 x its latency
+ *                      (the other steps' waits follow `max`); an LSS answer
+ *                      no step could take (it came after its step had
+ *                      ended) doubles the limit; answers within timeout
+ *                      take a quarter off it each. At most
+ *                      LSS_PATIENCE_FACTOR x timeout, never above
+ *                      LSS_PATIENCE_MAX_US.
  *
  * Why this is safe is written down in docs/engine.md: a wrong wait costs a
  * retry, never a wrong identity or node-ID. */
@@ -22,17 +32,27 @@
 #include "lss/lss_master.h"
 
 #define LSS_LATENCY_WINDOW 32
+#define LSS_PATIENCE_MAX_US 1000000u
+#define LSS_PATIENCE_FACTOR 4u
 
 typedef struct lss_timing {
         lss_timing_config cfg;
         uint32_t samples[LSS_LATENCY_WINDOW];
         unsigned n_samples, next;
+        uint32_t patience_us; /* the longer limit late answers called for; 0: none */
 } lss_timing;
 
 void lss_timing_init(lss_timing *t, const lss_timing_config *cfg);
 void lss_timing_add_sample(lss_timing *t, uint32_t latency_us);
 uint32_t lss_timing_max(const lss_timing *t);
 uint32_t lss_timing_min(const lss_timing *t);
+/* The longest no-answer wait now: the timeout, or the patience if longer. */
+uint32_t lss_timing_limit(const lss_timing *t);
+/* A step's first answer came `latency_us` after its request: `late` when it
+ * came after the step's wait had run out. */
+void lss_timing_on_answer(lss_timing *t, uint32_t latency_us, bool late);
+/* An LSS answer came that no step was waiting for (its step had ended). */
+void lss_timing_on_stray(lss_timing *t);
 /* The no-answer wait; `discovery` steps (first contact with unknown slaves)
  * always wait the configured timeout so that slow slaves get measured. */
 uint32_t lss_timing_wait(const lss_timing *t, bool discovery);

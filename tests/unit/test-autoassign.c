@@ -106,6 +106,37 @@ START_TEST(late_device_is_not_missing) {
 }
 END_TEST
 
+/* Devices slower than the configured timeout (40 ms against 20 ms: a loaded
+ * host, a slow stack) are all found, the mapped ones and the one from the
+ * pool: their late answers make the engine patient (docs/engine.md). */
+START_TEST(slow_devices_are_all_found) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(40000, 2000);
+        lss_map_entry map[2];
+        for (unsigned i = 0; i < 3; i++) {
+                lss_identity id = { 0xEC, 0x1234, 0x00010002, 0x3000 + i };
+                membus_add_slave(b, &id, 0xFF, &f);
+                if (i < 2)
+                        map[i] = (lss_map_entry) { .id = id, .node_id = (uint8_t) (10 + i) };
+        }
+        lss_autoassign_plan p = { .map = map, .n_map = 2, .store = true, .unknown = LSS_UNKNOWN_POOL,
+                                  .pool_lo = 20, .pool_hi = 29 };
+        lss_master *m = master_default();
+        const lss_result *r = run_pass(m, b, &p);
+        ck_assert_int_eq(r->status, LSS_OK);
+        for (unsigned i = 0; i < 3; i++) {
+                const lss_outcome *o = outcome_of(m, &membus_slave(b, i)->id);
+                ck_assert_msg(o && (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL),
+                              "device %u: %s %s", i, o ? lss_outcome_name(o->kind) : "-", o ? o->message : "");
+                ck_assert_uint_eq(membus_slave(b, i)->st.stored_node_id, i < 2 ? 10 + i : 20);
+        }
+        ck_assert_uint_gt(lss_master_get_stats(m)->patience_us, 40000);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 static const lss_identity A = { 0x9A, 3, 1, 17 };    /* mapped, non-configured, full identity */
 static const lss_identity B = { 0x9A, 3, 2, 18 };    /* mapped (no revision), configured wrong */
 static const lss_identity C = { 0x9A, 3, 1, 19 };    /* mapped, already right */
@@ -384,6 +415,7 @@ int main(void) {
         tcase_add_test(tc, cancel_leaves_waiting);
         tcase_add_test(tc, mapped_32);
         tcase_add_test(tc, interrupted_pass_is_stored);
+        tcase_add_test(tc, slow_devices_are_all_found);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }

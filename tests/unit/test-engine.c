@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* Raw services, error codes, strict acceptance, timing rules. */
 #include "engine-util.h"
+#include "lss/lss_timing.h"
 
 static const lss_identity ID1 = { 0x000000EC, 0x00001234, 0x00010002, 0x00001276 };
 
@@ -534,6 +535,42 @@ START_TEST(identify_services) {
 }
 END_TEST
 
+/* Patience (lss_timing.h, docs/engine.md): a late answer makes the limit
+ * 1.5 x its latency, an answer no step could take doubles it, both capped at
+ * 4 x timeout; answers within the timeout bring it back to the timeout. */
+START_TEST(patience_follows_late_answers) {
+        lss_timing_config c;
+        lss_timing_config_default(&c);
+        lss_timing t;
+        lss_timing_init(&t, &c);
+        ck_assert_uint_eq(lss_timing_limit(&t), 20000);
+        lss_timing_on_answer(&t, 30000, true);
+        ck_assert_uint_eq(lss_timing_limit(&t), 45000);
+        ck_assert_uint_eq(lss_timing_wait(&t, true), 45000);
+        /* the late guard does not grow with it */
+        ck_assert_uint_eq(lss_timing_late_guard(&t, true), 5000);
+        lss_timing_on_stray(&t);
+        ck_assert_uint_eq(lss_timing_limit(&t), 80000);
+        lss_timing_on_stray(&t);
+        lss_timing_on_answer(&t, 500000, true);
+        ck_assert_uint_eq(lss_timing_limit(&t), 80000);
+        /* an answer that is late but prompt for the limit changes nothing */
+        lss_timing_on_answer(&t, 30000, false);
+        ck_assert_uint_eq(lss_timing_limit(&t), 80000);
+        unsigned n = 0;
+        while (lss_timing_limit(&t) > 20000 && n < 100) {
+                lss_timing_on_answer(&t, 1000, false);
+                n++;
+        }
+        ck_assert_uint_eq(lss_timing_limit(&t), 20000);
+        ck_assert_uint_le(n, 5);
+        /* an answer late for a short adaptive wait but within the timeout
+         * is not a reason to wait longer than the timeout */
+        lss_timing_on_answer(&t, 9000, true);
+        ck_assert_uint_eq(lss_timing_limit(&t), 20000);
+}
+END_TEST
+
 int main(void) {
         Suite *s = suite_create("engine");
         TCase *tc = tcase_create("services");
@@ -554,6 +591,7 @@ int main(void) {
         tcase_add_test(tc, adaptive_timing);
         tcase_add_test(tc, late_answer_in_guard_counts);
         tcase_add_test(tc, identify_services);
+        tcase_add_test(tc, patience_follows_late_answers);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
