@@ -17,6 +17,7 @@ int lssd_config_new(lssd_config **ret) {
                 return -ENOMEM;
         c->lss_timeout_ms = LSSD_LSS_TIMEOUT_MS_DEFAULT;
         c->lss_timing = LSSD_LSS_TIMING_ADAPTIVE;
+        c->boot_ready_limit_s = LSSD_BOOT_READY_LIMIT_S_DEFAULT;
         *ret = c;
         return 0;
 }

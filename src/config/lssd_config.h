@@ -6,6 +6,7 @@
  *
  *   lss_timeout_ms = 20;        # optional, 1..10000, default 20
  *   lss_timing = "adaptive";    # optional, "adaptive" (default) | "fixed"
+ *   boot_ready_limit_s = 1800;  # optional, 1..86400, default 1800
  *   buses = ( { interface = "can0"; ... devices = ( { ... }, ... ); }, ... );
  *
  * Loading never prints and never exits: errors and warnings go to a
@@ -25,6 +26,9 @@
 #define LSSD_LSS_TIMEOUT_MS_DEFAULT 20u
 #define LSSD_LSS_TIMEOUT_MS_MAX 10000u
 #define LSSD_BITRATE_DEFAULT 125000u
+/* READY=1 at the latest this long after start-up, boot passes or not */
+#define LSSD_BOOT_READY_LIMIT_S_DEFAULT 1800u
+#define LSSD_BOOT_READY_LIMIT_S_MAX 86400u
 #define LSSD_CONFIG_SIZE_MAX (16u * 1024u * 1024u) /* bigger files are refused */
 
 typedef enum lssd_unknown_policy {
@@ -66,6 +70,7 @@ typedef struct lssd_config {
         char *source;                /* file name the config came from, NULL if built in code */
         uint32_t lss_timeout_ms;
         lssd_lss_timing lss_timing;
+        uint32_t boot_ready_limit_s; /* 1..LSSD_BOOT_READY_LIMIT_S_MAX */
         lssd_bus_config *buses;
         size_t n_buses;
 } lssd_config;

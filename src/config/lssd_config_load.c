@@ -21,7 +21,7 @@ typedef struct loader {
         int oom; /* -ENOMEM once an allocation failed */
 } loader;
 
-static const char *const root_keys[] = { "lss_timeout_ms", "lss_timing", "buses", NULL };
+static const char *const root_keys[] = { "lss_timeout_ms", "lss_timing", "boot_ready_limit_s", "buses", NULL };
 static const char *const bus_keys[] = {
         "interface", "bitrate", "auto_assign", "store", "unknown", "pool", "nmt_stop",
         "lss_timeout_ms", "lss_timing", "vendor", "product", "bitrate_change", "devices", NULL
@@ -475,6 +475,8 @@ static void parse_root(loader *l, const config_setting_t *root, lssd_config *c, 
         if (get_integer(l, root, "lss_timeout_ms", 1, LSSD_LSS_TIMEOUT_MS_MAX, &v, NULL) > 0)
                 c->lss_timeout_ms = (uint32_t) v;
         (void) get_lss_timing(l, root, &c->lss_timing);
+        if (get_integer(l, root, "boot_ready_limit_s", 1, LSSD_BOOT_READY_LIMIT_S_MAX, &v, NULL) > 0)
+                c->boot_ready_limit_s = (uint32_t) v;
 
         buses = config_setting_get_member(root, "buses");
         if (!buses) {

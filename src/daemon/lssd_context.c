@@ -48,7 +48,7 @@ lssd_context *lssd_context_free(lssd_context *ctx) {
         ctx->bus = sd_bus_flush_close_unref(ctx->bus);
         ctx->rtnl_source = sd_event_source_disable_unref(ctx->rtnl_source);
         ctx->stop_timeout = sd_event_source_disable_unref(ctx->stop_timeout);
-        ctx->extend_timer = sd_event_source_disable_unref(ctx->extend_timer);
+        ctx->ready_timer = sd_event_source_disable_unref(ctx->ready_timer);
         rtnl_watch_free(ctx->rtnl);
         sd_event_unref(ctx->event);
         lssd_config_free(ctx->config);

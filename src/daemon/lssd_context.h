@@ -12,6 +12,7 @@
 #include "can/rtnl_watch.h"
 #include "config/lssd_config.h"
 #include "daemon/lssd_auth.h"
+#include "daemon/lssd_ready.h"
 
 #define LSSD_DEFAULT_CONFIG   "/etc/lssd/lssd.conf"
 #define LSSD_QUEUE_MAX_DEFAULT 128u
@@ -62,9 +63,9 @@ typedef struct lssd_context {
         bool started;              /* past start-up: buses added now get no boot pass */
         bool name_owned;           /* buses may send (lssd_context_start_buses) */
         bool ready_deferred;       /* READY=1 waits for boot auto-assign passes */
-        sd_event_source *extend_timer; /* meanwhile: EXTEND_TIMEOUT_USEC= while they make progress */
-        uint64_t deferred_since;   /* CLOCK_MONOTONIC µs */
-        uint64_t boot_steps;       /* the passes' engine steps at the last extension */
+        bool ready_sent;           /* READY=1 went (it goes once) */
+        sd_event_source *ready_timer; /* meanwhile: EXTEND_TIMEOUT_USEC=, the limits (lssd_ready.h) */
+        lssd_ready_wait ready_wait;
 } lssd_context;
 
 /* Takes over `args` (it is zeroed). */

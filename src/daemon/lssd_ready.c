@@ -4,6 +4,8 @@
 #include <systemd/sd-daemon.h>
 
 #include "daemon/lssd_bus.h"
+#include "daemon/lssd_context.h"
+#include "daemon/lssd_job.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_ready.h"
 
@@ -11,6 +13,8 @@ void lssd_ready_status(lssd_context *ctx, bool ready) {
         char status[512];
         size_t n = 0;
         size_t served = 0;
+
+        ready = ready && !ctx->ready_sent; /* once */
 
         for (size_t i = 0; i < ctx->n_buses; i++)
                 if (!ctx->buses[i]->removing)
@@ -35,14 +39,21 @@ void lssd_ready_status(lssd_context *ctx, bool ready) {
                         n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s", b->boot_status);
         }
         /* the line first: whoever sees READY=1 finds it in the log already */
-        if (ready)
+        if (ready) {
                 log_info("Ready: %s", status);
+                ctx->ready_sent = true;
+        }
         (void) sd_notifyf(0, "%sSTATUS=%s", ready ? "READY=1\n" : "", status);
+}
+
+/* A boot pass that runs (or is about to) on a bus that is up. */
+static bool boot_pass_counts(const lssd_bus *b) {
+        return b->boot_pending && b->link == LSS_LINK_UP && !b->removing;
 }
 
 static bool boot_passes_running(const lssd_context *ctx) {
         for (size_t i = 0; i < ctx->n_buses; i++)
-                if (ctx->buses[i]->boot_pending && ctx->buses[i]->link == LSS_LINK_UP && !ctx->buses[i]->removing)
+                if (boot_pass_counts(ctx->buses[i]))
                         return true;
         return false;
 }
@@ -59,7 +70,7 @@ static bool boot_passes_hold(const lssd_context *ctx, uint64_t now) {
                         continue;
                 if (b->link == LSS_LINK_UP)
                         return true;
-                if (b->link == LSS_LINK_DOWN && now - ctx->deferred_since < LSSD_LINK_GRACE_USEC)
+                if (b->link == LSS_LINK_DOWN && now - ctx->ready_wait.since < LSSD_LINK_GRACE_USEC)
                         return true;
         }
         return false;
@@ -79,62 +90,143 @@ static uint64_t boot_pass_steps(const lssd_context *ctx) {
         return steps;
 }
 
+static uint64_t ready_limit_usec(const lssd_context *ctx) {
+        uint32_t s = ctx->config ? ctx->config->boot_ready_limit_s : LSSD_BOOT_READY_LIMIT_S_DEFAULT;
+        return (uint64_t) s * 1000000u;
+}
+
+/* A single step may wait a few LSS timeouts: a bus with long ones is not stuck sooner. */
+static uint64_t stall_usec(const lssd_context *ctx) {
+        uint64_t stall = LSSD_BOOT_STALL_USEC;
+        for (size_t i = 0; i < ctx->n_buses; i++) {
+                const lssd_bus *b = ctx->buses[i];
+                uint64_t t = (uint64_t) b->config->lss_timeout_ms * 1000u * LSSD_STALL_TIMEOUTS;
+                if (boot_pass_counts(b) && t > stall)
+                        stall = t;
+        }
+        return stall;
+}
+
+void lssd_ready_wait_start(lssd_ready_wait *w, uint64_t now, uint64_t steps) {
+        *w = (lssd_ready_wait) { .since = now, .steps = steps, .moved_at = now, .extended_at = now };
+}
+
+lssd_ready_verdict lssd_ready_wait_tick(lssd_ready_wait *w, uint64_t now, bool hold, bool running, uint64_t steps,
+                                        uint64_t limit_usec, uint64_t stall_usec) {
+        if (!hold)
+                return LSSD_READY_GO;
+        if (now - w->since >= limit_usec)
+                return LSSD_READY_AT_LIMIT;
+        /* time without a running pass (an interface still down) is no stall */
+        if (steps != w->steps || !running) {
+                w->steps = steps;
+                w->moved_at = now;
+        }
+        if (now - w->moved_at >= stall_usec)
+                return LSSD_READY_STALLED;
+        if (now - w->extended_at >= LSSD_EXTEND_EVERY_USEC) {
+                w->extended_at = now;
+                return LSSD_READY_HOLD_EXTEND;
+        }
+        return LSSD_READY_HOLD;
+}
+
 static void ready_now(lssd_context *ctx) {
         ctx->ready_deferred = false;
-        ctx->extend_timer = sd_event_source_disable_unref(ctx->extend_timer);
+        ctx->ready_timer = sd_event_source_disable_unref(ctx->ready_timer);
         lssd_ready_status(ctx, true);
 }
 
-/* While READY=1 waits: more time from systemd as long as the passes move. */
-static int on_extend(sd_event_source *s, uint64_t usec, void *userdata) {
+/* "vcan0 (auto-assigning for 12.5 s), vcan1 (pass not started yet)" */
+static void describe_passes(const lssd_context *ctx, char *buf, size_t size) {
+        uint64_t now = lssd_realtime_us();
+        size_t n = 0;
+
+        buf[0] = '\0';
+        for (size_t i = 0; i < ctx->n_buses && n < size; i++) {
+                const lssd_bus *b = ctx->buses[i];
+                const lssd_job *j = b->job;
+                if (!boot_pass_counts(b))
+                        continue;
+                int k;
+                if (j && j->type == LSSD_JOB_AUTO_ASSIGN && j->boot && b->pass_started_us > 0)
+                        k = snprintf(buf + n, size - n, "%s%s (auto-assigning for %.1f s)", n ? ", " : "", b->ifname,
+                                     now > b->pass_started_us ? (double) (now - b->pass_started_us) / 1e6 : 0.0);
+                else
+                        k = snprintf(buf + n, size - n, "%s%s (its pass has not started yet)", n ? ", " : "", b->ifname);
+                if (k < 0)
+                        break;
+                n += (size_t) k;
+        }
+}
+
+/* READY=1 before the passes ended: say why, where and how long. */
+static void ready_early(lssd_context *ctx, uint64_t now, const char *why) {
+        char passes[400];
+        describe_passes(ctx, passes, sizeof(passes));
+        log_warning("Reporting ready %.1f s after start-up although the boot auto-assignment has not ended: %s; "
+                    "still in their pass: %s. The passes go on and their results follow in the journal; units "
+                    "ordered after lssd.service may start before every device has its node-ID",
+                    (double) (now - ctx->ready_wait.since) / 1e6, why, passes[0] ? passes : "none");
+        ready_now(ctx);
+}
+
+static int on_ready_tick(sd_event_source *s, uint64_t usec, void *userdata) {
         lssd_context *ctx = userdata;
+        char why[160];
 
         if (!ctx->ready_deferred)
                 return 0;
-        if (!boot_passes_hold(ctx, usec)) { /* the grace for a bus that is down is over */
+        uint64_t now = now_usec(ctx);
+        uint64_t limit = ready_limit_usec(ctx), stall = stall_usec(ctx);
+        switch (lssd_ready_wait_tick(&ctx->ready_wait, now, boot_passes_hold(ctx, now), boot_passes_running(ctx),
+                                     boot_pass_steps(ctx), limit, stall)) {
+        case LSSD_READY_GO: /* the grace for a bus that is down is over */
                 ready_now(ctx);
                 return 0;
-        }
-        if (usec - ctx->deferred_since >= LSSD_BOOT_READY_LIMIT_USEC) {
-                log_warning("Boot auto-assignment still running after %llu s: reporting ready without it",
-                            (unsigned long long) (LSSD_BOOT_READY_LIMIT_USEC / 1000000u));
-                ready_now(ctx);
+        case LSSD_READY_AT_LIMIT:
+                snprintf(why, sizeof(why), "boot_ready_limit_s = %u s reached",
+                         (unsigned) (limit / 1000000u));
+                ready_early(ctx, now, why);
                 return 0;
-        }
-        uint64_t steps = boot_pass_steps(ctx);
-        if (steps != ctx->boot_steps)
+        case LSSD_READY_STALLED:
+                snprintf(why, sizeof(why), "the passes made no step (no LSS exchange answered or timed out) in %.1f s",
+                         (double) (now - ctx->ready_wait.moved_at) / 1e6);
+                ready_early(ctx, now, why);
+                return 0;
+        case LSSD_READY_HOLD_EXTEND:
                 (void) sd_notifyf(0, "EXTEND_TIMEOUT_USEC=%u", LSSD_EXTEND_BY_USEC);
-        else
-                log_warning("Boot auto-assignment made no progress in %u s: not asking systemd for more time",
-                            LSSD_EXTEND_EVERY_USEC / 1000000u);
-        ctx->boot_steps = steps;
-        (void) sd_event_source_set_time(s, usec + LSSD_EXTEND_EVERY_USEC);
+                break;
+        case LSSD_READY_HOLD:
+                break;
+        }
+        (void) sd_event_source_set_time(s, usec + LSSD_READY_TICK_USEC);
         return 0;
 }
 
 void lssd_ready_startup_done(lssd_context *ctx) {
         ctx->started = true;
         uint64_t now = now_usec(ctx);
-        ctx->deferred_since = now;
+        lssd_ready_wait_start(&ctx->ready_wait, now, boot_pass_steps(ctx));
         if (!boot_passes_hold(ctx, now)) {
                 lssd_ready_status(ctx, true);
                 return;
         }
         ctx->ready_deferred = true;
-        ctx->boot_steps = boot_pass_steps(ctx);
         (void) sd_notifyf(0, "EXTEND_TIMEOUT_USEC=%u", LSSD_EXTEND_BY_USEC);
         lssd_ready_status(ctx, false);
         if (boot_passes_running(ctx))
-                log_info("Auto-assigning before reporting ready");
+                log_info("Auto-assigning before reporting ready (at the latest in %u s: boot_ready_limit_s)",
+                         (unsigned) (ready_limit_usec(ctx) / 1000000u));
         else
                 log_info("An interface is down: waiting up to %u s for it to come up before reporting ready",
                          LSSD_LINK_GRACE_USEC / 1000000u);
-        int r = sd_event_add_time(ctx->event, &ctx->extend_timer, CLOCK_MONOTONIC, now + LSSD_EXTEND_EVERY_USEC, 0,
-                                  on_extend, ctx);
+        int r = sd_event_add_time(ctx->event, &ctx->ready_timer, CLOCK_MONOTONIC, now + LSSD_READY_TICK_USEC, 0,
+                                  on_ready_tick, ctx);
         if (r >= 0)
-                r = sd_event_source_set_enabled(ctx->extend_timer, SD_EVENT_ON);
+                r = sd_event_source_set_enabled(ctx->ready_timer, SD_EVENT_ON);
         if (r < 0)
-                log_warning("Failed to arm the start-timeout extension: %s", strerror(-r));
+                log_warning("Failed to arm the wait for the boot passes: %s", strerror(-r));
 }
 
 void lssd_ready_boot_pass_done(lssd_context *ctx) {

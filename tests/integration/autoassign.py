@@ -332,6 +332,63 @@ def test_notify_down_interface():
         subprocess.run(['ip', 'link', 'del', 'vcan2'], stderr=subprocess.DEVNULL)
 
 
+# ---- a boot pass longer than boot_ready_limit_s ----
+
+READY_LIMIT_S = 2
+
+
+def test_ready_limit():
+    """READY=1 at boot_ready_limit_s while the pass goes on (issue 19): units
+    ordered after lssd are not held for ever. A mapped device that is not on
+    the bus, with a long LSS timeout, makes the pass last ~15 s (more in the VM)."""
+    present = [Slave(V, P, R, 0x6100 + i) for i in range(2)]
+    mapping = [(s.serial, 50 + i) for i, s in enumerate(present)] + [(0x6E00, 60, R)]
+    cfg = 'boot_ready_limit_s = %d;\n' % READY_LIMIT_S + \
+        config('vcan0', mapping, vendor=hex(V), product=hex(P), auto_assign=True,
+               lss_timeout_ms=250 if os.environ.get('LSSD_IN_VM') else 150)
+    with Env({'vcan0': present}, config=cfg, candump=True, notify=True) as env:
+        ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=120, what='READY=1')
+        first = env.notify_msgs[0]
+        waited = ready['_t'] - first['_t']
+        env.step('READY=1 %.2f s after the first message, STATUS=%s' % (waited, ready.get('STATUS')))
+        expect(READY_LIMIT_S - 0.5 <= waited <= READY_LIMIT_S + 2.5,
+               'READY=1 at boot_ready_limit_s = %d: came %.2f s after the first sd_notify message (%r)' %
+               (READY_LIMIT_S, waited, env.notify_msgs))
+        expect('vcan0: auto-assigning' in ready.get('STATUS', ''), 'STATUS at READY says the pass goes on: %r' %
+               ready.get('STATUS'))
+        expect(int(first.get('EXTEND_TIMEOUT_USEC', 0)) >= 30000000, 'EXTEND_TIMEOUT_USEC at start: %r' % first)
+        out = env.lssd_output()
+        warn = [x for x in out.splitlines() if 'Reporting ready' in x]
+        env.step('journal: %r' % warn)
+        expect(warn and 'boot_ready_limit_s = %d s reached' % READY_LIMIT_S in warn[0] and
+               'vcan0 (auto-assigning for ' in warn[0], 'the warning at the limit names it and the bus: %r' % warn)
+        expect('AutoAssign on vcan0' not in out[:out.find('Ready: ')], 'the pass ended before READY:\n' + out)
+        n_ready_frames = len(env.frames('vcan0')) if env.real else 0
+
+        # the pass goes on, ends and is journaled; READY=1 does not come again
+        done = env.notify_wait(lambda m: 'vcan0: 2 assigned' in m.get('STATUS', ''), timeout=180,
+                               what='STATUS with the result of the pass')
+        expect(done['_t'] - ready['_t'] > 1, 'the pass ended %.2f s after READY: not much of a test' %
+               (done['_t'] - ready['_t']))
+        expect('1 missing' in done['STATUS'], 'STATUS after the pass: %r' % done['STATUS'])
+        time.sleep(0.5)
+        readies = [m for m in env.notify_msgs if m.get('READY') == '1']
+        expect_eq(len(readies), 1, 'READY=1 messages')
+        out = env.lssd_output()
+        expect(0 <= out.find('Ready: ') < out.find('AutoAssign on vcan0: 2 assigned'),
+               'journal: Ready:, then the result of the pass:\n' + out)
+        expect_eq(out.count('Ready: '), 1, '"Ready:" lines in the journal')
+        last = env.get(B0, BUS_IFACE, 'LastPass')
+        expect_eq((last[2], last[3], last[4].get('assigned'), last[4].get('missing')), ('boot', 'partial', 2, 1),
+                  'LastPass: %r' % (last,))
+        for s, node in zip(present, (50, 51)):
+            expect_eq(env.get(dev('vcan0', s), DEVICE_IFACE, 'NodeId'), node, 'NodeId of %x' % s.serial)
+        if env.real:
+            expect(len(lssd_lss(env.frames('vcan0')[n_ready_frames:])) > 0, 'no LSS frame after READY=1')
+            expect_eq(slave_ids(env, 'vcan0', present), {s: (n, n) for s, n in mapping[:2]}, 'slaves after the pass')
+        env.alive()
+
+
 # ---- a crash in the middle of a pass ----
 
 def test_crash_restart():
@@ -488,6 +545,7 @@ TESTS = {
     'mixed': test_mixed,
     'notify-missing-interface': test_notify_missing_interface,
     'notify-down-interface': test_notify_down_interface,
+    'ready-limit': test_ready_limit,
     'crash-restart': test_crash_restart,
     'interrupted-store': test_interrupted_store,
     'bad-config': test_bad_config,

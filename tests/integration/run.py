@@ -885,10 +885,12 @@ def test_check_config():
 
     def check(*args):
         return subprocess.run([lssd] + list(args), capture_output=True, text=True, timeout=60)
+    with open(conf) as f:  # the example's first map entry (its line moves as the example grows)
+        line = 1 + next(i for i, x in enumerate(f) if '{ serial = 0x00001276; node_id = 5; }' in x)
     for args in (('--check-config', conf), ('--check-config=' + conf)):
         r = check(*args) if isinstance(args, tuple) else check(args)
         expect(r.returncode == 0, '%r: %r' % (args, r))
-        expect('line 92: vendor 0x000000ec product 0x00001234 revision any serial 0x00001276 -> node-ID 5'
+        expect('line %d: vendor 0x000000ec product 0x00001234 revision any serial 0x00001276 -> node-ID 5' % line
                in r.stdout, 'the map shown: %r' % r.stdout)
     r = check('--check-config', conf, 'extra')
     expect(r.returncode == 1 and "Unexpected argument 'extra'" in r.stderr, 'the extra word named: %r' % r)

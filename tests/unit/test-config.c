@@ -144,6 +144,7 @@ START_TEST(example_conf_loads_cleanly) {
 
         ck_assert_uint_eq(c->lss_timeout_ms, 20);
         ck_assert_int_eq(c->lss_timing, LSSD_LSS_TIMING_ADAPTIVE);
+        ck_assert_uint_eq(c->boot_ready_limit_s, 1800); /* commented out: the default */
         ck_assert_uint_eq(c->n_buses, 2);
         const lssd_bus_config *b = lssd_config_find_bus(c, "can0");
         ck_assert_ptr_eq(b, &c->buses[0]);
@@ -183,6 +184,7 @@ START_TEST(all_keys) {
 
         ck_assert_uint_eq(c->lss_timeout_ms, 35);
         ck_assert_int_eq(c->lss_timing, LSSD_LSS_TIMING_FIXED);
+        ck_assert_uint_eq(c->boot_ready_limit_s, 600);
         ck_assert_uint_eq(c->n_buses, 2);
 
         const lssd_bus_config *b = &c->buses[0];
@@ -242,6 +244,8 @@ START_TEST(defaults) {
         ck_assert_uint_eq(d.n_messages, 0);
         ck_assert_uint_eq(c->lss_timeout_ms, LSSD_LSS_TIMEOUT_MS_DEFAULT);
         ck_assert_int_eq(c->lss_timing, LSSD_LSS_TIMING_ADAPTIVE);
+        ck_assert_uint_eq(c->boot_ready_limit_s, 1800);
+        ck_assert_uint_eq(LSSD_BOOT_READY_LIMIT_S_DEFAULT, 1800);
         const lssd_bus_config *b = &c->buses[0];
         ck_assert_uint_eq(b->bitrate, 125000);
         ck_assert(!b->auto_assign);
@@ -501,12 +505,66 @@ START_TEST(global_key_errors) {
         expect_load_error("\nlss_timeout_ms = 0;\n", ":2: lss_timeout_ms: 0 is out of range 1..10000");
         expect_load_error("lss_timeout_ms = 10001;\n", ":1: lss_timeout_ms: 10001 is out of range 1..10000");
         expect_load_error("lss_timeout_ms = \"20\";\n", ":1: lss_timeout_ms: expected an integer, got a string");
+        expect_load_error("\n\nboot_ready_limit_s = 0;\n", ":3: boot_ready_limit_s: 0 is out of range 1..86400");
+        expect_load_error("boot_ready_limit_s = 86401;\n", ":1: boot_ready_limit_s: 86401 is out of range 1..86400");
+        expect_load_error("boot_ready_limit_s = -5;\n", ":1: boot_ready_limit_s: -5 is out of range 1..86400");
+        expect_load_error("boot_ready_limit_s = 0x100000000;\n", "boot_ready_limit_s:", "out of range 1..86400");
+        expect_load_error("boot_ready_limit_s = \"30\";\n", ":1: boot_ready_limit_s: expected an integer, got a string");
+        expect_load_error("boot_ready_limit_s = 30.5;\n", ":1: boot_ready_limit_s: expected an integer");
         expect_load_error("lss_timing = 5;\n", ":1: lss_timing: expected a string, got an integer");
         expect_load_error("lss_timing = \"Fixed\";\n", ":1: lss_timing: \"Fixed\" is not \"adaptive\" or \"fixed\"");
         expect_load_error("\n\nbuses = 5;\n", ":3: buses: expected a list ( { ... }, ... ), got an integer");
         expect_load_error("buses = { interface = \"can0\"; };\n", ":1: buses: expected a list");
         expect_load_error("buses = ( 5 );\n", ":1: buses[0]: expected a bus { interface = ...; ... }, got an integer");
         expect_load_error("buses = ( \"can0\" );\n", "buses[0]: expected a bus", "got a string");
+}
+END_TEST
+
+/* boot_ready_limit_s: its range, its default, errors naming the file and line,
+ * and that it is a global key (in a bus it is unknown there, ignored). */
+START_TEST(boot_ready_limit) {
+        static const struct { const char *text; uint32_t want; } good[] = {
+                { "buses = ( );\n", 1800 },
+                { "boot_ready_limit_s = 1;\nbuses = ( );\n", 1 },
+                { "boot_ready_limit_s = 86400;\nbuses = ( );\n", 86400 },
+                { "boot_ready_limit_s = 0x3C;\nbuses = ( );\n", 60 },
+                { "buses = ( );\nboot_ready_limit_s = 120;\n", 120 },
+        };
+        for (size_t i = 0; i < sizeof(good) / sizeof(good[0]); i++) {
+                lssd_diag d = LSSD_DIAG_INIT;
+                lssd_config *c = NULL;
+                ck_assert_int_eq(load(good[i].text, &c, &d), 0);
+                ck_assert_uint_eq(d.n_errors, 0);
+                ck_assert_uint_eq(c->boot_ready_limit_s, good[i].want);
+                lssd_config_free(c);
+                lssd_diag_clear(&d);
+        }
+
+        /* the whole message, file name and line first */
+        const char *text = "lss_timeout_ms = 20;\n# the limit\nboot_ready_limit_s = 86401;\nbuses = ( );\n";
+        char *path = write_temp(text, strlen(text)), *want;
+        lssd_diag d = LSSD_DIAG_INIT;
+        lssd_config *c = NULL;
+        ck_assert_int_eq(lssd_config_load_file(path, &c, &d), -EINVAL);
+        ck_assert_ptr_null(c);
+        ck_assert_int_ge(asprintf(&want, "%s:3: boot_ready_limit_s: 86401 is out of range 1..86400", path), 0);
+        expect_message(&d, LSSD_DIAG_ERROR, want);
+        ck_assert_uint_eq(d.n_errors, 1);
+        free(want);
+        lssd_diag_clear(&d);
+        ck_assert_int_eq(unlink(path), 0);
+        free(path);
+
+        ck_assert_int_eq(load_bus_key("boot_ready_limit_s = 5;", &c, &d), 0);
+        expect_message(&d, LSSD_DIAG_WARNING, ":4: buses[0].boot_ready_limit_s: unknown key, ignored");
+        ck_assert_uint_eq(c->boot_ready_limit_s, 1800);
+        lssd_config_free(c);
+        lssd_diag_clear(&d);
+
+        /* the built-in configuration (--bus only) has the default too */
+        ck_assert_int_eq(lssd_config_new(&c), 0);
+        ck_assert_uint_eq(c->boot_ready_limit_s, LSSD_BOOT_READY_LIMIT_S_DEFAULT);
+        lssd_config_free(c);
 }
 END_TEST
 
@@ -1068,6 +1126,7 @@ int main(void) {
         tcase_add_loop_test(tc, bus_key_error, 0, sizeof(bus_key_errors) / sizeof(bus_key_errors[0]));
         tcase_add_loop_test(tc, interface_names, 0, sizeof(ifnames) / sizeof(ifnames[0]));
         tcase_add_test(tc, global_key_errors);
+        tcase_add_test(tc, boot_ready_limit);
         tcase_add_test(tc, long_string_is_quoted_bounded);
         tcase_add_test(tc, missing_keys);
         tcase_add_test(tc, semantic_errors_fixture);
