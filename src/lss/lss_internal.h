@@ -66,6 +66,8 @@ typedef struct lss_assign_state {
         const bool *taken;      /* node-IDs known to be taken (128 entries), or NULL */
         const bool *unstored;   /* node-IDs that may not be stored (128 entries), or NULL */
         lss_fastscan_state fs;
+        uint64_t until;         /* unassign: the reset slave must answer 255 by then */
+        uint8_t seen;           /* unassign: the node-ID it answered after the reset (0: none) */
 } lss_assign_state;
 
 typedef struct lss_range_item {
@@ -213,6 +215,7 @@ void master_progress(lss_master *m, double p);
 int proc_fastscan(lss_master *m, lss_fastscan_state *s);
 int proc_assign(lss_master *m, lss_assign_state *s);
 int proc_fastscan_assign(lss_master *m, lss_assign_state *s);
+int proc_unassign(lss_master *m, lss_assign_state *s);
 int proc_enumerate(lss_master *m, lss_scan_state *s);
 /* enumerate.c: Inquire Identity of the slave in configuration against
  * s->found (s->confirm, s->other) */
