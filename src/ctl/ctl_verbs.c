@@ -400,6 +400,30 @@ static void device_node_ids(ctl_context *c, const char *ifname, const uint32_t i
         ctl_objects_done(&o);
 }
 
+/* assign, unassign --json: the object begins with the bus and the identity */
+static void json_device_begin(ctl_json *j, const char *ifname, const uint32_t id[4]) {
+        static const char *const keys[4] = { "vendor", "product", "revision", "serial" };
+        ctl_json_init(j, stdout);
+        ctl_json_object_begin(j);
+        ctl_json_key(j, "bus");
+        ctl_json_string(j, ifname);
+        for (size_t i = 0; i < 4; i++) {
+                ctl_json_key(j, keys[i]);
+                ctl_json_uint(j, id[i]);
+        }
+}
+
+/* ... and ends with the warning (null when none) */
+static void json_device_end(ctl_json *j, const char *warning) {
+        ctl_json_key(j, "warning");
+        if (warning[0])
+                ctl_json_string(j, warning);
+        else
+                ctl_json_null(j);
+        ctl_json_object_end(j);
+        ctl_json_finish(j);
+}
+
 /* assign: what was done, and a warning when the map says otherwise */
 static void report_assignment(ctl_context *c, const char *ifname, const uint32_t id[4], uint8_t old_id,
                               uint8_t node_id) {
@@ -413,16 +437,8 @@ static void report_assignment(ctl_context *c, const char *ifname, const uint32_t
         bool stored = changed && !c->no_store;
 
         if (c->json) {
-                static const char *const keys[4] = { "vendor", "product", "revision", "serial" };
                 ctl_json j;
-                ctl_json_init(&j, stdout);
-                ctl_json_object_begin(&j);
-                ctl_json_key(&j, "bus");
-                ctl_json_string(&j, ifname);
-                for (size_t i = 0; i < 4; i++) {
-                        ctl_json_key(&j, keys[i]);
-                        ctl_json_uint(&j, id[i]);
-                }
+                json_device_begin(&j, ifname, id);
                 ctl_json_key(&j, "old");
                 if (old_id)
                         ctl_json_uint(&j, old_id);
@@ -432,13 +448,7 @@ static void report_assignment(ctl_context *c, const char *ifname, const uint32_t
                 ctl_json_uint(&j, node_id);
                 ctl_json_key(&j, "stored");
                 ctl_json_bool(&j, stored);
-                ctl_json_key(&j, "warning");
-                if (warning[0])
-                        ctl_json_string(&j, warning);
-                else
-                        ctl_json_null(&j);
-                ctl_json_object_end(&j);
-                ctl_json_finish(&j);
+                json_device_end(&j, warning);
         } else if (!c->quiet) {
                 char from[16] = "?";
                 if (old_id)
@@ -549,16 +559,8 @@ static int report_unassignment(ctl_context *c, sd_bus_message *reply, const char
                 return ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to parse lssd's answer: %s", strerror(-r));
 
         if (c->json) {
-                static const char *const keys[4] = { "vendor", "product", "revision", "serial" };
                 ctl_json j;
-                ctl_json_init(&j, stdout);
-                ctl_json_object_begin(&j);
-                ctl_json_key(&j, "bus");
-                ctl_json_string(&j, ifname);
-                for (size_t i = 0; i < 4; i++) {
-                        ctl_json_key(&j, keys[i]);
-                        ctl_json_uint(&j, id[i]);
-                }
+                json_device_begin(&j, ifname, id);
                 ctl_json_key(&j, "old");
                 ctl_json_uint(&j, old_id);
                 ctl_json_key(&j, "stored");
@@ -567,13 +569,7 @@ static int report_unassignment(ctl_context *c, sd_bus_message *reply, const char
                 ctl_json_bool(&j, in_effect);
                 ctl_json_key(&j, "message");
                 ctl_json_string(&j, message);
-                ctl_json_key(&j, "warning");
-                if (warning[0])
-                        ctl_json_string(&j, warning);
-                else
-                        ctl_json_null(&j);
-                ctl_json_object_end(&j);
-                ctl_json_finish(&j);
+                json_device_end(&j, warning);
         } else if (!c->quiet)
                 printf("%s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ": %s.\n", ifname,
                        id[0], id[1], id[2], id[3], message);

@@ -206,6 +206,13 @@ bool step_conflict(const lss_master *m);
                                        step_start(m); })
 #define SELECT_RETRIED(m, pc, attempt, id) STEP_RETRIED(m, pc, attempt, step_selective(m, id))
 
+/* assign.c: the answer of the selected slave to Inquire Node-ID (sets
+ * result.node_id) and to Store Configuration (result.err/spec; a slave that
+ * cannot store sets result.not_stored: no failure); false after master_fail(). */
+bool inquired_node_id_ok(lss_master *m);
+bool configure_answer_ok(lss_master *m, uint8_t node_id);
+bool store_answer_ok(lss_master *m);
+
 /* master.c */
 void master_fail(lss_master *m, enum lss_status st, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 int master_add_device(lss_master *m, const lss_identity *id, uint8_t node_id);

@@ -22,53 +22,22 @@ int proc_unassign(lss_master *m, lss_assign_state *s) {
                 goto out;
         }
         REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
-        if (!step_answered(m)) {
-                master_fail(m, LSS_E_NO_RESPONSE, "the selected slave did not answer Inquire Node-ID");
+        if (!inquired_node_id_ok(m))
                 goto out;
-        }
-        if (step_conflict(m)) {
-                master_fail(m, LSS_E_CONFLICT, "more than one slave in configuration state answered Inquire Node-ID");
-                goto out;
-        }
-        s->old = m->step.answer.data[1];
-        m->result.node_id = s->old;
+        s->old = m->result.node_id;
 
         /* also when it runs at 255 already: its pending or stored node-ID may not be */
         REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_configure_node_id(&f__, LSS_NODE_ID_UNCONFIGURED),
                         LSS_CS_CONFIGURE_NODE_ID);
-        if (!step_answered(m)) {
-                master_fail(m, LSS_E_NO_RESPONSE, "no answer to Configure Node-ID 255");
+        if (!configure_answer_ok(m, LSS_NODE_ID_UNCONFIGURED))
                 goto out;
-        }
-        if (step_conflict(m)) {
-                master_fail(m, LSS_E_CONFLICT, "more than one slave answered Configure Node-ID");
-                goto out;
-        }
-        m->result.err = m->step.answer.data[1];
-        m->result.spec = m->step.answer.data[2];
-        if (m->result.err != 0) {
-                master_fail(m, LSS_E_REJECTED, "Configure Node-ID 255 rejected by the slave: error %u, spec %u",
-                            m->result.err, m->result.spec);
-                goto out;
-        }
         m->result.changed = s->old != LSS_NODE_ID_UNCONFIGURED;
 
         if (s->flags & LSS_UNASSIGN_STORE) {
                 REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
-                if (!step_answered(m)) {
-                        master_fail(m, LSS_E_NO_RESPONSE, "no answer to Store Configuration");
+                if (!store_answer_ok(m))
                         goto out;
-                }
-                m->result.err = m->step.answer.data[1];
-                m->result.spec = m->step.answer.data[2];
-                if (m->result.err == LSS_ERR_STORE_NOT_SUPPORTED || m->result.err == LSS_ERR_STORE_MEDIA)
-                        m->result.not_stored = true; /* 255 until the next power cycle: go on, say so */
-                else if (m->result.err != 0) {
-                        master_fail(m, LSS_E_REJECTED, "Store Configuration rejected by the slave: %s (error %u, "
-                                    "spec %u)", lss_store_error_name(m->result.err), m->result.err, m->result.spec);
-                        goto out;
-                } else
-                        m->result.stored = true;
+                m->result.stored = !m->result.not_stored;
         }
 
         SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
