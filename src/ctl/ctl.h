@@ -28,6 +28,7 @@ typedef struct ctl_context {
         bool force;                 /* assign: even a taken node-ID */
         bool quiet;                 /* no report of what was done */
         bool dry_run;               /* auto-assign: discovery only */
+        bool reset;                 /* unassign: reset the device and check it runs non-configured */
         bool has_delay;
         uint16_t delay_ms;
         bool has_vendor, has_product;
@@ -74,6 +75,7 @@ int verb_list(ctl_context *c);
 int verb_scan(ctl_context *c);
 int verb_auto_assign(ctl_context *c);
 int verb_assign(ctl_context *c);
+int verb_unassign(ctl_context *c);
 int verb_set_bitrate(ctl_context *c);
 int verb_reload(ctl_context *c);
 int verb_monitor(ctl_context *c);

@@ -217,6 +217,10 @@ static int show_result(ctl_context *c, ctl_json *j, const step *st, sd_bus_messa
                         ctl_json_null(j);
                 else
                         printf("done\n");
+                /* CiA 305: 255 is the pending node-ID only */
+                if (!c->json && strcmp(st->s->method, "ConfigureNodeId") == 0 && st->v[0] == 0xFF)
+                        fprintf(stderr, "lssctl: note: node-ID 255 is pending: a configured device keeps its "
+                                "node-ID until it is reset or power-cycled ('lssctl unassign --reset' does it all)\n");
                 break;
         case RES_FOUND:
                 r = sd_bus_message_read(reply, "b", &found);

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
-/* The verbs that start jobs on a bus (scan, auto-assign, assign,
+/* The verbs that start jobs on a bus (scan, auto-assign, assign, unassign,
  * set-bitrate) and reload. */
 #include <errno.h>
 #include <inttypes.h>
@@ -400,6 +400,30 @@ static void device_node_ids(ctl_context *c, const char *ifname, const uint32_t i
         ctl_objects_done(&o);
 }
 
+/* assign, unassign --json: the object begins with the bus and the identity */
+static void json_device_begin(ctl_json *j, const char *ifname, const uint32_t id[4]) {
+        static const char *const keys[4] = { "vendor", "product", "revision", "serial" };
+        ctl_json_init(j, stdout);
+        ctl_json_object_begin(j);
+        ctl_json_key(j, "bus");
+        ctl_json_string(j, ifname);
+        for (size_t i = 0; i < 4; i++) {
+                ctl_json_key(j, keys[i]);
+                ctl_json_uint(j, id[i]);
+        }
+}
+
+/* ... and ends with the warning (null when none) */
+static void json_device_end(ctl_json *j, const char *warning) {
+        ctl_json_key(j, "warning");
+        if (warning[0])
+                ctl_json_string(j, warning);
+        else
+                ctl_json_null(j);
+        ctl_json_object_end(j);
+        ctl_json_finish(j);
+}
+
 /* assign: what was done, and a warning when the map says otherwise */
 static void report_assignment(ctl_context *c, const char *ifname, const uint32_t id[4], uint8_t old_id,
                               uint8_t node_id) {
@@ -413,16 +437,8 @@ static void report_assignment(ctl_context *c, const char *ifname, const uint32_t
         bool stored = changed && !c->no_store;
 
         if (c->json) {
-                static const char *const keys[4] = { "vendor", "product", "revision", "serial" };
                 ctl_json j;
-                ctl_json_init(&j, stdout);
-                ctl_json_object_begin(&j);
-                ctl_json_key(&j, "bus");
-                ctl_json_string(&j, ifname);
-                for (size_t i = 0; i < 4; i++) {
-                        ctl_json_key(&j, keys[i]);
-                        ctl_json_uint(&j, id[i]);
-                }
+                json_device_begin(&j, ifname, id);
                 ctl_json_key(&j, "old");
                 if (old_id)
                         ctl_json_uint(&j, old_id);
@@ -432,13 +448,7 @@ static void report_assignment(ctl_context *c, const char *ifname, const uint32_t
                 ctl_json_uint(&j, node_id);
                 ctl_json_key(&j, "stored");
                 ctl_json_bool(&j, stored);
-                ctl_json_key(&j, "warning");
-                if (warning[0])
-                        ctl_json_string(&j, warning);
-                else
-                        ctl_json_null(&j);
-                ctl_json_object_end(&j);
-                ctl_json_finish(&j);
+                json_device_end(&j, warning);
         } else if (!c->quiet) {
                 char from[16] = "?";
                 if (old_id)
@@ -454,6 +464,49 @@ static void report_assignment(ctl_context *c, const char *ifname, const uint32_t
                 fprintf(stderr, "lssctl: warning: %s\n", warning);
 }
 
+/* The device argument of assign and unassign: SERIAL (a known device) or
+ * VENDOR:PRODUCT:REVISION:SERIAL; its bus's name and object path. */
+static int resolve_device(ctl_context *c, const char *arg, uint32_t id[4], char **ret_ifname, char **ret_path) {
+        char *ifname = NULL;
+        int r;
+
+        r = ctl_parse_identity(arg, id);
+        if (r == -ENOENT) {
+                uint32_t serial;
+                if (ctl_parse_u32(arg, &serial) < 0)
+                        return ctl_usage(c, "Invalid serial number '%s'.", arg);
+                r = resolve_serial(c, serial, id, &ifname);
+        } else if (r < 0)
+                return ctl_usage(c, "Invalid identity '%s': VENDOR:PRODUCT:REVISION:SERIAL.", arg);
+        else if (c->bus_name) {
+                ifname = strdup(c->bus_name);
+                r = ifname ? 0 : -ENOMEM;
+        } else
+                r = bus_of_identity(c, id, &ifname);
+        if (r < 0) {
+                free(ifname);
+                return r;
+        }
+
+        /* the path through lssd, which also says whether it serves that bus */
+        const char *saved = c->bus_name;
+        char **paths = NULL, **names = NULL;
+        size_t n = 0;
+        c->bus_name = ifname;
+        r = ctl_buses(c, &paths, &names, &n);
+        c->bus_name = saved;
+        if (r < 0) {
+                free(ifname);
+                return r;
+        }
+        *ret_path = paths[0];
+        paths[0] = NULL;
+        ctl_strv_free(paths, n);
+        ctl_strv_free(names, n);
+        *ret_ifname = ifname;
+        return 0;
+}
+
 int verb_assign(ctl_context *c) {
         sd_bus_message *m = NULL;
         char *ifname = NULL, *path = NULL;
@@ -463,37 +516,9 @@ int verb_assign(ctl_context *c) {
 
         if (ctl_parse_node_id(c->args[1], &node_id) < 0)
                 return ctl_usage(c, "Invalid node-ID '%s': 1..127.", c->args[1]);
-        r = ctl_parse_identity(c->args[0], id);
-        if (r == -ENOENT) {
-                uint32_t serial;
-                if (ctl_parse_u32(c->args[0], &serial) < 0)
-                        return ctl_usage(c, "Invalid serial number '%s'.", c->args[0]);
-                r = resolve_serial(c, serial, id, &ifname);
-        } else if (r < 0)
-                return ctl_usage(c, "Invalid identity '%s': VENDOR:PRODUCT:REVISION:SERIAL.", c->args[0]);
-        else if (c->bus_name) {
-                ifname = strdup(c->bus_name);
-                r = ifname ? 0 : -ENOMEM;
-        } else
-                r = bus_of_identity(c, id, &ifname);
+        r = resolve_device(c, c->args[0], id, &ifname, &path);
         if (r < 0)
                 goto finish;
-
-        /* the path through lssd, which also says whether it serves that bus */
-        {
-                const char *saved = c->bus_name;
-                char **paths = NULL, **names = NULL;
-                size_t n = 0;
-                c->bus_name = ifname;
-                r = ctl_buses(c, &paths, &names, &n);
-                c->bus_name = saved;
-                if (r < 0)
-                        goto finish;
-                path = paths[0];
-                paths[0] = NULL;
-                ctl_strv_free(paths, n);
-                ctl_strv_free(names, n);
-        }
 
         r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, path, CTL_BUS_IFACE, "AssignNodeId");
         if (r >= 0)
@@ -519,6 +544,78 @@ int verb_assign(ctl_context *c) {
                 report_assignment(c, ifname, id, old_id, node_id);
 finish:
         sd_bus_message_unref(m);
+        free(path);
+        free(ifname);
+        return r;
+}
+
+/* unassign: lssd's account of what happened, and what remains */
+static int report_unassignment(ctl_context *c, sd_bus_message *reply, const char *ifname, const uint32_t id[4]) {
+        uint8_t old_id;
+        int stored, in_effect;
+        const char *message, *warning;
+        int r = sd_bus_message_read(reply, "ybbss", &old_id, &stored, &in_effect, &message, &warning);
+        if (r < 0)
+                return ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to parse lssd's answer: %s", strerror(-r));
+
+        if (c->json) {
+                ctl_json j;
+                json_device_begin(&j, ifname, id);
+                ctl_json_key(&j, "old");
+                ctl_json_uint(&j, old_id);
+                ctl_json_key(&j, "stored");
+                ctl_json_bool(&j, stored);
+                ctl_json_key(&j, "in_effect");
+                ctl_json_bool(&j, in_effect);
+                ctl_json_key(&j, "message");
+                ctl_json_string(&j, message);
+                json_device_end(&j, warning);
+        } else if (!c->quiet)
+                printf("%s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ": %s.\n", ifname,
+                       id[0], id[1], id[2], id[3], message);
+        if (warning[0] && !c->json)
+                fprintf(stderr, "lssctl: warning: %s\n", warning);
+        return 0;
+}
+
+int verb_unassign(ctl_context *c) {
+        sd_bus_message *m = NULL, *reply = NULL;
+        char *ifname = NULL, *path = NULL;
+        ctl_runner *run = NULL;
+        uint32_t id[4];
+        int r;
+
+        r = resolve_device(c, c->args[0], id, &ifname, &path);
+        if (r < 0)
+                goto finish;
+
+        r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, path, CTL_BUS_IFACE, "UnassignNodeId");
+        if (r >= 0)
+                r = sd_bus_message_append(m, "uuuu", id[0], id[1], id[2], id[3]);
+        if (r >= 0)
+                r = sd_bus_message_open_container(m, 'a', "{sv}");
+        if (r >= 0 && c->no_store)
+                r = append_bool_option(m, "store", false);
+        if (r >= 0 && c->reset)
+                r = append_bool_option(m, "reset", true);
+        if (r >= 0)
+                r = sd_bus_message_close_container(m);
+        if (r < 0) {
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to build the call: %s", strerror(-r));
+                goto finish;
+        }
+        r = ctl_runner_new(c, c->stderr_tty, &run);
+        if (r < 0) {
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to set up the event loop: %s", strerror(-r));
+                goto finish;
+        }
+        r = run_job(c, run, m, path, ifname, "UnassignNodeId", "Unassignment", &reply);
+        if (r >= 0)
+                r = report_unassignment(c, reply, ifname, id);
+finish:
+        sd_bus_message_unref(reply);
+        sd_bus_message_unref(m);
+        ctl_runner_free(run);
         free(path);
         free(ifname);
         return r;

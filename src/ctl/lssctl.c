@@ -26,6 +26,7 @@ enum {
         OPT_FORCE = 1 << 9,
         OPT_QUIET = 1 << 10,
         OPT_DRY_RUN = 1 << 11,
+        OPT_RESET = 1 << 12,
 };
 
 typedef struct verb {
@@ -42,6 +43,7 @@ static const verb verbs[] = {
         { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR, false, verb_scan },
         { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false,
           verb_assign },
+        { "unassign", 1, 1, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_RESET | OPT_QUIET, false, verb_unassign },
         { "auto-assign", 0, 0,
           OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE | OPT_QUIET | OPT_DRY_RUN, false,
           verb_auto_assign },
@@ -61,6 +63,8 @@ static void help(void) {
                "  scan                     Find every LSS slave (fastscan and slowscan)\n"
                "  assign SERIAL|VENDOR:PRODUCT:REVISION:SERIAL NODEID\n"
                "                           Give one device a node-ID (1..127)\n"
+               "  unassign SERIAL|VENDOR:PRODUCT:REVISION:SERIAL\n"
+               "                           Make one device non-configured (node-ID 255)\n"
                "  auto-assign              Give every device its node-ID from the map\n"
                "  set-bitrate BITRATE      Switch every slave and the interface to BITRATE\n"
                "  reload                   Make lssd read its configuration again\n"
@@ -70,14 +74,18 @@ static void help(void) {
                "  -h --help                Show this help\n"
                "     --version             Show the version\n"
                "  -b --bus IFACE           Act on this CAN interface only\n"
-               "     --json                JSON output (status, list, scan, assign, auto-assign, monitor, raw)\n"
+               "     --json                JSON output (status, list, scan, assign, unassign, auto-assign, monitor,\n"
+               "                           raw)\n"
                "     --no-pager            Do not pipe output into a pager\n"
                "     --no-legend           No column headers (list, scan, auto-assign)\n"
-               "     --no-store            Do not store in the slaves (assign, auto-assign, set-bitrate)\n"
+               "     --no-store            Do not store in the slaves (assign, unassign, auto-assign,\n"
+               "                           set-bitrate)\n"
                "     --no-verify           Do not wait for the boot-up after assigning (assign)\n"
                "     --force               Give the node-ID even if another device answers to it (assign)\n"
                "     --dry-run             Say what auto-assign would change, send nothing but discovery\n"
-               "  -q --quiet               Do not say what was done (assign, auto-assign, set-bitrate, reload)\n"
+               "     --reset               Reset the device so that 255 takes effect now, and check it (unassign)\n"
+               "  -q --quiet               Do not say what was done (assign, unassign, auto-assign, set-bitrate,\n"
+               "                           reload)\n"
                "     --delay MS            Switch delay for set-bitrate (default 100)\n"
                "     --skip-missing        set-bitrate: go ahead without mapped devices the scan misses\n"
                "     --vendor ID --product ID\n"
@@ -98,6 +106,7 @@ enum {
         ARG_SKIP_MISSING,
         ARG_FORCE,
         ARG_DRY_RUN,
+        ARG_RESET,
 };
 
 static const char *option_name(unsigned flag) {
@@ -114,6 +123,7 @@ static const char *option_name(unsigned flag) {
         case OPT_FORCE: return "--force";
         case OPT_QUIET: return "--quiet";
         case OPT_DRY_RUN: return "--dry-run";
+        case OPT_RESET: return "--reset";
         default: return "?";
         }
 }
@@ -144,6 +154,7 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 { "skip-missing", no_argument, NULL, ARG_SKIP_MISSING },
                 { "force", no_argument, NULL, ARG_FORCE },
                 { "dry-run", no_argument, NULL, ARG_DRY_RUN },
+                { "reset", no_argument, NULL, ARG_RESET },
                 { "quiet", no_argument, NULL, 'q' },
                 {}
         };
@@ -214,6 +225,10 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 case ARG_DRY_RUN:
                         c->dry_run = true;
                         *given |= OPT_DRY_RUN;
+                        break;
+                case ARG_RESET:
+                        c->reset = true;
+                        *given |= OPT_RESET;
                         break;
                 case 'q':
                         c->quiet = true;
@@ -301,7 +316,7 @@ int main(int argc, char *argv[]) {
                                            : ctl_usage(&c, "Too many arguments for '%s'.", v->name);
                 goto finish;
         }
-        for (unsigned flag = 1; flag <= OPT_DRY_RUN; flag <<= 1)
+        for (unsigned flag = 1; flag <= OPT_RESET; flag <<= 1)
                 if ((given & flag) && !(v->options & flag)) {
                         r = ctl_usage(&c, "Option %s does not go with '%s'.", option_name(flag), v->name);
                         goto finish;

@@ -139,6 +139,29 @@ int lssd_bus_method_assign(lssd_bus *b, sd_bus_message *m, const lss_identity *i
         return queue_job(b, m, j, false, error);
 }
 
+/* The same rules as AssignNodeId: authorized, then queued as a job */
+static int method_unassign_node_id(sd_bus_message *m, void *userdata, sd_bus_error *error) {
+        lssd_bus *b = userdata;
+        lss_identity id;
+        lssd_unassign_options o;
+        lssd_job *j;
+        int r;
+
+        r = sd_bus_message_read(m, "uuuu", &id.vendor, &id.product, &id.revision, &id.serial);
+        if (r < 0)
+                return r;
+        r = lssd_unassign_options_read(m, &o, error);
+        if (r < 0)
+                return r;
+
+        r = lssd_job_new(LSSD_JOB_UNASSIGN, m, &j);
+        if (r < 0)
+                return r;
+        j->identity = id;
+        j->unassign = o;
+        return submit(b, m, j, false, error);
+}
+
 static int method_auto_assign(sd_bus_message *m, void *userdata, sd_bus_error *error) {
         lssd_bus *b = userdata;
         lssd_autoassign_options o;
@@ -307,6 +330,11 @@ const sd_bus_vtable lssd_bus_vtable[] = {
                                             "a{sv}", options),
                                 SD_BUS_NO_RESULT,
                                 method_assign_node_id, SD_BUS_VTABLE_UNPRIVILEGED),
+        SD_BUS_METHOD_WITH_ARGS("UnassignNodeId",
+                                SD_BUS_ARGS("u", vendor, "u", product, "u", revision, "u", serial, "a{sv}", options),
+                                SD_BUS_RESULT("y", old_node_id, "b", stored, "b", in_effect, "s", message,
+                                              "s", warning),
+                                method_unassign_node_id, SD_BUS_VTABLE_UNPRIVILEGED),
         SD_BUS_METHOD_WITH_ARGS("SetBitrate",
                                 SD_BUS_ARGS("u", bitrate, "q", switch_delay_ms, "a{sv}", options),
                                 SD_BUS_RESULT("a(uuuus)", devices),

@@ -21,6 +21,8 @@ const char *lssd_job_name(const lssd_job *j) {
                 return "AutoAssign";
         case LSSD_JOB_SET_BITRATE:
                 return "SetBitrate";
+        case LSSD_JOB_UNASSIGN:
+                return "UnassignNodeId";
         default:
                 return "?";
         }

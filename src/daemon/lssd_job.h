@@ -24,6 +24,7 @@ typedef enum lssd_job_type {
         LSSD_JOB_EXECUTE, /* Execute(): raw services in a row, then switch-global waiting */
         LSSD_JOB_AUTO_ASSIGN, /* AutoAssign() or the boot pass: make the bus match the map */
         LSSD_JOB_SET_BITRATE, /* SetBitrate(): scan, then the whole network to a new rate (lssd_bitrate.c) */
+        LSSD_JOB_UNASSIGN, /* UnassignNodeId(): back to non-configured */
         _LSSD_JOB_TYPE_MAX,
 } lssd_job_type;
 
@@ -54,6 +55,9 @@ struct lssd_job {
         uint8_t node_id;
         lssd_assign_options assign;
 
+        /* UNASSIGN (identity as ASSIGN) */
+        lssd_unassign_options unassign;
+
         /* SCAN */
         lssd_vendor_product *pairs;
         size_t n_pairs;
@@ -77,7 +81,8 @@ struct lssd_job {
         int retune_error;            /* errno of a failed host retune */
 };
 
-/* "Reset", "Scan", "AssignNodeId", the raw method name, "Execute", "AutoAssign". */
+/* "Reset", "Scan", "AssignNodeId", the raw method name, "Execute", "AutoAssign",
+ * "SetBitrate", "UnassignNodeId". */
 const char *lssd_job_name(const lssd_job *j);
 
 /* A new job; request (may be NULL) is referenced, its sender copied. */

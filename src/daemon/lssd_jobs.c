@@ -274,6 +274,110 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         return 0;
 }
 
+/* ---- UnassignNodeId: back to non-configured ---- */
+
+static void append_sentence(char *buf, size_t size, const char *text) {
+        size_t n = strlen(buf);
+        if (n < size)
+                snprintf(buf + n, size - n, "%s%s", n ? "; " : "", text);
+}
+
+static int run_unassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
+        char ident[40];
+        lssd_identity_format(&j->identity, ident, sizeof(ident));
+
+        if (!r) {
+                unsigned flags = (j->unassign.store ? LSS_UNASSIGN_STORE : 0u) |
+                                 (j->unassign.reset ? LSS_UNASSIGN_RESET : 0u);
+                int k = lss_master_unassign(b->engine, &j->identity, flags, lssd_bus_now(b));
+                return k < 0 ? job_start_failed(b, j, k) : 1;
+        }
+
+        uint8_t old = r->node_id;
+        if (r->status != LSS_OK) {
+                sd_bus_error e = SD_BUS_ERROR_NULL;
+                lssd_service service = strncmp(r->message, "Store", 5) == 0 ? LSSD_SERVICE_STORE
+                                                                              : LSSD_SERVICE_CONFIGURE_NODE_ID;
+                lssd_error_from_result(&e, r, service, NULL);
+                lssd_log_device(LOG_WARNING, b->ifname, &j->identity, old, "%s: UnassignNodeId %s failed: %s",
+                                b->ifname, ident, e.message);
+                reply_error(j, &e);
+                sd_bus_error_free(&e);
+                j->result = lssd_status_to_result(r->status);
+                return 0;
+        }
+
+        /* it answered: lssd knows it from now on, at the node-ID it runs with */
+        lssd_device *d = NULL;
+        uint8_t now_id = r->in_effect ? LSS_NODE_ID_UNCONFIGURED : old;
+        int k = lssd_bus_get_device(b, &j->identity, now_id, &d);
+        if (k >= 0) {
+                if (d->node_id != now_id)
+                        d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
+                d->node_id = now_id;
+                if (r->in_effect) {
+                        lssd_heard_owner(&b->heard, LSS_NODE_ID_UNCONFIGURED, &j->identity);
+                        d->assigned = d->pooled = false;
+                }
+                d->blocked = false;
+                d->missing = false;
+                d->last_seen = lssd_realtime_us();
+                d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
+                lssd_bus_refresh_devices(b);
+                if (r->in_effect && old != LSS_NODE_ID_UNCONFIGURED && b->ctx->bus)
+                        (void) sd_bus_emit_signal(b->ctx->bus, b->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
+                                                  d->path, old, LSS_NODE_ID_UNCONFIGURED);
+        } else
+                log_error("%s: failed to record device %s: %s", b->ifname, ident, strerror(-k));
+
+        /* what happened, and what remains */
+        char message[200], warning[400] = "", s[200];
+        const char *store_part = r->stored ? ", stored" : r->not_stored ? ", not stored" : ", not stored (store=false)";
+        if (old == LSS_NODE_ID_UNCONFIGURED)
+                snprintf(message, sizeof(message), "non-configured already (node-ID 255)%s", store_part);
+        else if (r->in_effect)
+                snprintf(message, sizeof(message), "node-ID %u -> 255 (non-configured)%s; reset, it runs "
+                         "non-configured now", old, store_part);
+        else
+                snprintf(message, sizeof(message), "node-ID %u -> 255 (non-configured) pending%s", old, store_part);
+        if (old != LSS_NODE_ID_UNCONFIGURED && !r->in_effect) {
+                snprintf(s, sizeof(s), "the device keeps node-ID %u until it is reset or power-cycled; use the "
+                         "option reset (lssctl unassign --reset)", old);
+                append_sentence(warning, sizeof(warning), s);
+        }
+        if (r->not_stored) {
+                snprintf(s, sizeof(s), "the device cannot store (%s): its stored node-ID comes back at the next "
+                         "power cycle", lss_store_error_name(r->err));
+                append_sentence(warning, sizeof(warning), s);
+        } else if (!r->stored) {
+                if (old != LSS_NODE_ID_UNCONFIGURED)
+                        snprintf(s, sizeof(s), "not stored: node-ID %u comes back at the next power cycle", old);
+                else
+                        snprintf(s, sizeof(s), "not stored: the stored node-ID applies at the next power cycle");
+                append_sentence(warning, sizeof(warning), s);
+        }
+        if (d && d->mapped_node_id != 0) {
+                snprintf(s, sizeof(s), "the map gives this device node-ID %u: the next auto-assign pass (also the "
+                         "one at boot) gives it back", d->mapped_node_id);
+                append_sentence(warning, sizeof(warning), s);
+        }
+        lssd_log_device(LOG_NOTICE, b->ifname, &j->identity, old, "%s: device %s: %s%s%s", b->ifname, ident, message,
+                        warning[0] ? "; " : "", warning);
+        j->result = "done";
+        if (!j->request)
+                return 0;
+        sd_bus_message *reply = NULL;
+        k = sd_bus_message_new_method_return(j->request, &reply);
+        if (k >= 0)
+                k = sd_bus_message_append(reply, "ybbss", old, r->stored, r->in_effect, message, warning);
+        if (k >= 0)
+                reply_message(j, reply);
+        else
+                log_error("%s: failed to build the reply of UnassignNodeId: %s", b->ifname, strerror(-k));
+        sd_bus_message_unref(reply);
+        return 0;
+}
+
 /* ---- Scan: fastscan enumeration, then slowscan per vendor/product pair ---- */
 
 /* What an enumeration will likely find: the non-configured devices seen
@@ -687,6 +791,8 @@ int lssd_job_run(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 return run_autoassign(b, j, r);
         case LSSD_JOB_SET_BITRATE:
                 return lssd_bitrate_run(b, j, r);
+        case LSSD_JOB_UNASSIGN:
+                return run_unassign(b, j, r);
         default:
                 return job_start_failed(b, j, -EINVAL);
         }

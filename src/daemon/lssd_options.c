@@ -145,6 +145,21 @@ int lssd_assign_options_read(sd_bus_message *m, lssd_assign_options *ret, sd_bus
         return 0;
 }
 
+static const lssd_option unassign_table[] = {
+        LSSD_OPTION("store", 'b', lssd_unassign_options, store),
+        LSSD_OPTION("reset", 'b', lssd_unassign_options, reset),
+        LSSD_OPTION_END,
+};
+
+int lssd_unassign_options_read(sd_bus_message *m, lssd_unassign_options *ret, sd_bus_error *error) {
+        lssd_unassign_options o = { .store = true };
+        int r = lssd_options_read(m, "options", unassign_table, &o, error);
+        if (r < 0)
+                return r;
+        *ret = o;
+        return 0;
+}
+
 static const lssd_option autoassign_table[] = {
         LSSD_OPTION_SEEN("store", 'b', lssd_autoassign_options, store, has_store),
         LSSD_OPTION_SEEN("nmt_stop", 'b', lssd_autoassign_options, nmt_stop, has_nmt_stop),

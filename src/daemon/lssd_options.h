@@ -47,6 +47,14 @@ typedef struct lssd_assign_options {
         bool store, verify, force;
 } lssd_assign_options;
 
+/* UnassignNodeId(uuuu, a{sv} options): `store` b (default true): Store
+ * Configuration of 255; `reset` b (default false): NMT Reset Communication
+ * at the old node-ID and check that the device answers 255 (until then a
+ * configured device keeps its old node-ID, CiA 305). */
+typedef struct lssd_unassign_options {
+        bool store, reset;
+} lssd_unassign_options;
+
 /* Fastscan(a{sv} known): `vendor`, `product`, `revision`, `serial` (u) are
  * confirmed in one step each instead of being scanned bit by bit. */
 typedef struct lssd_fastscan_options {
@@ -64,6 +72,7 @@ typedef struct lssd_autoassign_options {
 
 int lssd_scan_options_read(sd_bus_message *m, lssd_scan_options *ret, sd_bus_error *error);
 int lssd_assign_options_read(sd_bus_message *m, lssd_assign_options *ret, sd_bus_error *error);
+int lssd_unassign_options_read(sd_bus_message *m, lssd_unassign_options *ret, sd_bus_error *error);
 int lssd_fastscan_options_read(sd_bus_message *m, const char *argument, lssd_fastscan_options *ret,
                                sd_bus_error *error);
 int lssd_autoassign_options_read(sd_bus_message *m, lssd_autoassign_options *ret, sd_bus_error *error);

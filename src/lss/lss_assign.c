@@ -9,21 +9,65 @@
 /* Send an unconfirmed frame (no wait). */
 #define SEND(m, pc, frame_expr) STEP_REQUEST(m, pc, frame_expr, -1)
 
+bool inquired_node_id_ok(lss_master *m) {
+        if (!step_answered(m)) {
+                master_fail(m, LSS_E_NO_RESPONSE, "the selected slave did not answer Inquire Node-ID");
+                return false;
+        }
+        if (step_conflict(m)) {
+                master_fail(m, LSS_E_CONFLICT, "more than one slave in configuration state answered Inquire Node-ID");
+                return false;
+        }
+        m->result.node_id = m->step.answer.data[1];
+        return true;
+}
+
+bool configure_answer_ok(lss_master *m, uint8_t node_id) {
+        if (!step_answered(m)) {
+                master_fail(m, LSS_E_NO_RESPONSE, "no answer to Configure Node-ID %u", node_id);
+                return false;
+        }
+        if (step_conflict(m)) {
+                master_fail(m, LSS_E_CONFLICT, "more than one slave answered Configure Node-ID");
+                return false;
+        }
+        m->result.err = m->step.answer.data[1];
+        m->result.spec = m->step.answer.data[2];
+        if (m->result.err != 0) {
+                master_fail(m, LSS_E_REJECTED, "Configure Node-ID %u rejected by the slave: error %u, spec %u",
+                            node_id, m->result.err, m->result.spec);
+                return false;
+        }
+        return true;
+}
+
+bool store_answer_ok(lss_master *m) {
+        if (!step_answered(m)) {
+                master_fail(m, LSS_E_NO_RESPONSE, "no answer to Store Configuration");
+                return false;
+        }
+        m->result.err = m->step.answer.data[1];
+        m->result.spec = m->step.answer.data[2];
+        if (m->result.err == LSS_ERR_STORE_NOT_SUPPORTED || m->result.err == LSS_ERR_STORE_MEDIA) {
+                /* a device that cannot store still takes the node-ID
+                 * until its next power cycle: go on, say so */
+                m->result.not_stored = true;
+        } else if (m->result.err != 0) {
+                master_fail(m, LSS_E_REJECTED, "Store Configuration rejected by the slave: %s (error %u, spec %u)",
+                            lss_store_error_name(m->result.err), m->result.err, m->result.spec);
+                return false;
+        }
+        return true;
+}
+
 /* The part shared by both ways in: the slave is the only one in configuration. */
 static int assign_tail(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->tail_pc);
         REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                         LSS_CS_INQUIRE_NODE_ID);
-        if (!step_answered(m)) {
-                master_fail(m, LSS_E_NO_RESPONSE, "the selected slave did not answer Inquire Node-ID");
+        if (!inquired_node_id_ok(m))
                 goto out;
-        }
-        if (step_conflict(m)) {
-                master_fail(m, LSS_E_CONFLICT, "more than one slave in configuration state answered Inquire Node-ID");
-                goto out;
-        }
-        s->old = m->step.answer.data[1];
-        m->result.node_id = s->old;
+        s->old = m->result.node_id;
         if (s->old == s->node_id) {
                 /* Already right: nothing to configure, nothing to store —
                  * unless the node-ID came from an interrupted pass: configured,
@@ -60,41 +104,15 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
         }
         REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_configure_node_id(&f__, s->node_id),
                         LSS_CS_CONFIGURE_NODE_ID);
-        if (!step_answered(m)) {
-                master_fail(m, LSS_E_NO_RESPONSE, "no answer to Configure Node-ID %u", s->node_id);
+        if (!configure_answer_ok(m, s->node_id))
                 goto out;
-        }
-        if (step_conflict(m)) {
-                master_fail(m, LSS_E_CONFLICT, "more than one slave answered Configure Node-ID");
-                goto out;
-        }
-        m->result.err = m->step.answer.data[1];
-        m->result.spec = m->step.answer.data[2];
-        if (m->result.err != 0) {
-                master_fail(m, LSS_E_REJECTED, "Configure Node-ID %u rejected by the slave: error %u, spec %u",
-                            s->node_id, m->result.err, m->result.spec);
-                goto out;
-        }
         m->result.changed = true;
 
 store:
         if (s->flags & LSS_ASSIGN_STORE) {
                 REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
-                if (!step_answered(m)) {
-                        master_fail(m, LSS_E_NO_RESPONSE, "no answer to Store Configuration");
+                if (!store_answer_ok(m))
                         goto out;
-                }
-                m->result.err = m->step.answer.data[1];
-                m->result.spec = m->step.answer.data[2];
-                if (m->result.err == LSS_ERR_STORE_NOT_SUPPORTED || m->result.err == LSS_ERR_STORE_MEDIA) {
-                        /* a device that cannot store still takes the node-ID
-                         * until its next power cycle: go on, say so */
-                        m->result.not_stored = true;
-                } else if (m->result.err != 0) {
-                        master_fail(m, LSS_E_REJECTED, "Store Configuration rejected by the slave: %s (error %u, "
-                                    "spec %u)", lss_store_error_name(m->result.err), m->result.err, m->result.spec);
-                        goto out;
-                }
         }
 
         /* back to waiting: a non-configured slave now resets itself and boots up */

@@ -66,6 +66,8 @@ typedef struct lss_assign_state {
         const bool *taken;      /* node-IDs known to be taken (128 entries), or NULL */
         const bool *unstored;   /* node-IDs that may not be stored (128 entries), or NULL */
         lss_fastscan_state fs;
+        uint64_t until;         /* unassign: the reset slave must answer 255 by then */
+        uint8_t seen;           /* unassign: the node-ID it answered after the reset (0: none) */
 } lss_assign_state;
 
 typedef struct lss_range_item {
@@ -210,6 +212,13 @@ bool step_conflict(const lss_master *m);
                                        step_start(m); })
 #define SELECT_RETRIED(m, pc, attempt, id) STEP_RETRIED(m, pc, attempt, step_selective(m, id))
 
+/* assign.c: the answer of the selected slave to Inquire Node-ID (sets
+ * result.node_id) and to Store Configuration (result.err/spec; a slave that
+ * cannot store sets result.not_stored: no failure); false after master_fail(). */
+bool inquired_node_id_ok(lss_master *m);
+bool configure_answer_ok(lss_master *m, uint8_t node_id);
+bool store_answer_ok(lss_master *m);
+
 /* master.c */
 void master_fail(lss_master *m, enum lss_status st, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 int master_add_device(lss_master *m, const lss_identity *id, uint8_t node_id);
@@ -219,6 +228,7 @@ void master_progress(lss_master *m, double p);
 int proc_fastscan(lss_master *m, lss_fastscan_state *s);
 int proc_assign(lss_master *m, lss_assign_state *s);
 int proc_fastscan_assign(lss_master *m, lss_assign_state *s);
+int proc_unassign(lss_master *m, lss_assign_state *s);
 int proc_enumerate(lss_master *m, lss_scan_state *s);
 /* enumerate.c: Inquire Identity of the slave in configuration against
  * s->found (s->confirm, s->other) */

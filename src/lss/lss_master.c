@@ -399,6 +399,12 @@ static int proc_assign_top(lss_master *m) {
         PT_END(&m->pc);
 }
 
+static int proc_unassign_top(lss_master *m) {
+        PT_BEGIN(&m->pc);
+        PT_CALL(&m->pc, proc_unassign(m, &m->as));
+        PT_END(&m->pc);
+}
+
 static int proc_fastscan_assign_top(lss_master *m) {
         PT_BEGIN(&m->pc);
         PT_CALL(&m->pc, proc_fastscan_assign(m, &m->as));
@@ -575,6 +581,17 @@ int lss_master_assign(lss_master *m, const lss_identity *id, uint8_t node_id, un
         m->as.node_id = node_id;
         m->as.flags = flags;
         return start_op(m, proc_assign_top, true, now);
+}
+
+int lss_master_unassign(lss_master *m, const lss_identity *id, unsigned flags, uint64_t now) {
+        if (flags & ~(unsigned) (LSS_UNASSIGN_STORE | LSS_UNASSIGN_RESET))
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        memset(&m->as, 0, sizeof(m->as));
+        m->as.id = *id;
+        m->as.flags = flags;
+        return start_op(m, proc_unassign_top, true, now);
 }
 
 int lss_master_fastscan_assign(lss_master *m, const lss_fastscan_known *known, uint8_t node_id, unsigned flags,

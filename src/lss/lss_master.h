@@ -93,6 +93,8 @@ typedef struct lss_result {
         bool in_use;         /* assign: the node-ID already answers on the bus */
         bool not_stored;     /* assign: configured and verified, but the slave cannot store
                               * (Store Configuration error 1 or 2 in err): volatile until a power cycle */
+        bool stored;         /* unassign: Store Configuration of 255 answered with success */
+        bool in_effect;      /* unassign: the slave was seen running non-configured (Inquire Node-ID 255) */
         lss_identity id;     /* fastscan, inquire identity */
         lss_device *devices; /* scans: every slave found (owned by the engine until next start) */
         size_t n_devices;
@@ -200,6 +202,24 @@ int lss_master_assign(lss_master *m, const lss_identity *id, uint8_t node_id, un
  * node-ID as lss_master_assign() does. result.id tells which slave it was. */
 int lss_master_fastscan_assign(lss_master *m, const lss_fastscan_known *known, uint8_t node_id, unsigned flags,
                                uint64_t now);
+
+enum lss_unassign_flags {
+        LSS_UNASSIGN_STORE = 1u << 0, /* Store Configuration after configuring 255 */
+        /* NMT Reset Communication at the old node-ID, then selective switch
+         * and Inquire Node-ID until the slave answers 255 (within the
+         * boot-up timeout; else LSS_E_VERIFY) */
+        LSS_UNASSIGN_RESET = 1u << 1,
+};
+/* Make the slave with this identity non-configured: selective switch,
+ * inquire the node-ID (result.node_id: the old one), Configure Node-ID 255,
+ * Store Configuration, back to waiting. CiA 305: a configured slave keeps
+ * answering to its old node-ID until NMT Reset Communication (or a reset or
+ * power cycle); with LSS_UNASSIGN_RESET the engine sends it and checks the
+ * slave comes back at 255. result.in_effect: the slave was seen at 255 (it
+ * was non-configured already, or after the reset); result.stored: the store
+ * succeeded; result.not_stored: the slave cannot store (error 1 or 2 in err:
+ * it gets its old node-ID back at the next power cycle; not a failure). */
+int lss_master_unassign(lss_master *m, const lss_identity *id, unsigned flags, uint64_t now);
 
 /* ---- changing the bit rate of the whole network (lss_bitrate.c) ---- */
 

@@ -329,6 +329,64 @@ def test_assign():
         env.alive()
 
 
+def test_unassign():
+    """lssctl unassign: what happened, and what remains (CiA 305: the old
+    node-ID stays until a reset); --reset finishes the job."""
+    with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
+        ctl = Ctl(env)
+        ctl.fails('not-found', 'No known device has serial number 0x80002468', 'unassign', '0x80002468')
+        scan_all(env)
+        s = SLAVES[1]  # node 6, the map says 6
+        path = device_path('vcan0', *s.identity)
+        # the whole identity (a configured device a fastscan does not find); without
+        # --reset the device keeps node 6, and lssctl says so
+        r = ctl('unassign', ident(s))
+        expect_eq((r.rc, r.out), (0, 'vcan0: device 0x000000ec:0x00001234:0x00010002:0x80002468: node-ID 6 -> 255 '
+                                  '(non-configured) pending, stored.\n'), 'unassign (%r)' % r.err)
+        expect('lssctl: warning: the device keeps node-ID 6 until it is reset or power-cycled; use the option reset '
+               '(lssctl unassign --reset)' in r.err, 'pending warning: %r' % r.err)
+        expect('the map gives this device node-ID 6' in r.err, 'map warning: %r' % r.err)
+        expect_eq(env.get(path, DEVICE_IFACE, 'NodeId'), 6, 'NodeId until the reset')
+        # now lssd knows it: a bare serial; --reset: in effect, checked; --json says the same
+        got = ctl.ok('unassign', '0x80002468', '--reset', '--json').json
+        expect_eq({k: got[k] for k in ('bus', 'serial', 'old', 'stored', 'in_effect')},
+                  {'bus': 'vcan0', 'serial': 0x80002468, 'old': 6, 'stored': True, 'in_effect': True},
+                  'unassign --reset --json')
+        expect('runs non-configured now' in got['message'], 'message: %r' % got['message'])
+        expect('until it is reset' not in (got['warning'] or ''), 'warning: %r' % got['warning'])
+        expect_eq(env.get(path, DEVICE_IFACE, 'NodeId'), 255, 'NodeId after --reset')
+        d = [x for x in ctl.ok('list', '--json').json if x['serial'] == 0x80002468][0]
+        expect_eq((d['node_id'], d['state']), (255, 'non-configured'), 'list after unassign --reset')
+        if env.real:
+            st = env.slave_state('vcan0', s.serial)
+            expect_eq((st['active_node_id'], st['stored_node_id']), ('255', '255'), 'slave after --reset')
+        # --no-store --quiet: nothing on stdout, the warning still on stderr
+        r = ctl('unassign', ident(SLAVES[2]), '--reset', '--no-store', '--quiet')
+        expect_eq((r.rc, r.out), (0, ''), 'unassign --quiet (%r)' % r.err)
+        expect('not stored: node-ID 7 comes back at the next power cycle' in r.err, 'no-store warning: %r' % r.err)
+        # lssd's errors, each with its exit status; usage errors before asking lssd
+        ctl.fails('not-found', 'no such device', 'unassign', '1:2:3:4')
+        ctl.fails('not-found', "does not serve interface 'vcan3'", 'unassign', '1:2:3:4', '--bus', 'vcan3')
+        for args, text in ((('1:2:3',), "Invalid identity '1:2:3'"), (('0xZZ',), 'Invalid serial'),
+                           ((), 'Too few arguments'), (('0x1276', '5'), 'Too many arguments'),
+                           (('0x1276', '--force'), 'does not go with'), (('0x1276', '--no-verify'), 'does not go with')):
+            ctl.fails('usage', text, 'unassign', *args)
+        ctl.fails('usage', 'does not go with', 'assign', '0x1276', '5', '--reset')
+        env.alive()
+
+
+def test_raw_unassign_note():
+    """raw configure-node-id 255: done, and a note that it is pending until a reset."""
+    with Env({'vcan0': SLAVES}) as env:
+        ctl = Ctl(env)
+        r = ctl('raw', 'switch-selective', ident(SLAVES[1]), 'configure-node-id', '255', 'store')
+        expect_eq(r.rc, 0, 'raw configure-node-id 255 (%r)' % r.err)
+        expect('configure-node-id: done' in r.out, 'raw output: %r' % r.out)
+        expect('node-ID 255 is pending' in r.err and 'lssctl unassign --reset' in r.err, 'raw note: %r' % r.err)
+        r = ctl('raw', 'switch-selective', ident(SLAVES[1]), 'configure-node-id', '6')
+        expect('pending' not in r.err, 'no note for 1..127: %r' % r.err)
+
+
 def test_auto_assign():
     with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
         ctl = Ctl(env)
@@ -731,7 +789,8 @@ def test_bad_arguments():
             r = ctl.fails('usage', text, *args)
             expect("Try 'lssctl --help'" in r.err, 'hint: %r' % r.err)
         h = ctl.ok('--help').out
-        for verb in ('status', 'list', 'scan', 'assign', 'auto-assign', 'set-bitrate', 'reload', 'monitor', 'raw'):
+        for verb in ('status', 'list', 'scan', 'assign', 'unassign', 'auto-assign', 'set-bitrate', 'reload', 'monitor',
+                     'raw'):
             expect(re.search(r'^  %s\b' % verb, h, re.M), '--help lacks ' + verb)
         expect(ctl.ok('--version').out.startswith('lssctl '), '--version')
 
@@ -758,10 +817,12 @@ def test_completion():
                        capture_output=True, text=True)
     expect_eq((p.returncode, p.stderr), (0, ''), 'loading the completion script')
     expect('_lssctl' in p.stdout, 'complete -p: %r' % p.stdout)
-    expect_eq(complete(['lssctl', '']), sorted(['status', 'list', 'scan', 'assign', 'auto-assign', 'set-bitrate',
-                                                 'reload', 'monitor', 'raw']), 'commands')
+    expect_eq(complete(['lssctl', '']), sorted(['status', 'list', 'scan', 'assign', 'unassign', 'auto-assign',
+                                                 'set-bitrate', 'reload', 'monitor', 'raw']), 'commands')
     expect_eq(complete(['lssctl', 'au']), ['auto-assign'], 'command prefix')
     expect('--no-store' in complete(['lssctl', 'assign', '--']), 'assign options')
+    expect_eq(complete(['lssctl', 'unassign', '--']), sorted(['--bus', '--json', '--no-store', '--reset', '--quiet']),
+              'unassign options')
     expect('--no-store' not in complete(['lssctl', 'list', '--']), 'list options')
     expect('--json' in complete(['lssctl', 'list', '--']), 'list options')
     expect('inquire-node-id' in complete(['lssctl', 'raw', '']), 'raw services')
@@ -773,6 +834,7 @@ def test_completion():
         expect_eq(complete(['lssctl', 'assign', ''], env=e), sorted('0x%08x' % s.serial for s in SLAVES),
                   'known serials')
         expect_eq(complete(['lssctl', 'assign', '0x8'], env=e), ['0x80002468'], 'serial prefix')
+        expect_eq(complete(['lssctl', 'unassign', '0x8'], env=e), ['0x80002468'], 'unassign: serial prefix')
 
 
 MAN_PAGES = ['lssd.8', 'lssctl.1', 'lss-sim.1', 'lssd.conf.5', 'org.lssd.LSS1.5']
@@ -809,6 +871,8 @@ TESTS = {
     'scan-two-buses': test_scan_two_buses,
     'assign': test_assign,
     'assign-taken': test_assign_taken,
+    'unassign': test_unassign,
+    'raw-unassign-note': test_raw_unassign_note,
     'auto-assign-dry-run': test_auto_assign_dry_run,
     'auto-assign': test_auto_assign,
     'auto-assign-partial': test_auto_assign_partial,

@@ -58,7 +58,7 @@ def fuzz(user=None):
         env.step('dfuzzer exited with %d' % p.returncode)
         # dfuzzer: 0 = clean, 1 = its own error, 2 = a crash or exception found
         assert p.returncode == 0, 'dfuzzer exited with %d' % p.returncode
-        for member in ('Scan', 'Execute', 'AssignNodeId', 'SwitchModeSelective', 'GetBus'):
+        for member in ('Scan', 'Execute', 'AssignNodeId', 'UnassignNodeId', 'SwitchModeSelective', 'GetBus'):
             assert any(('[M] %s' % member) in line and ('PASS' in line or 'SKIP' in line) for line in lines), \
                 'dfuzzer did not test %s' % member
         env.alive()

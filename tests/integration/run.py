@@ -285,6 +285,75 @@ def test_assign():
         env.alive()
 
 
+def test_unassign():
+    """UnassignNodeId: 255 configured and stored; CiA 305 keeps the old
+    node-ID until a reset, and the reply says which it is."""
+    with Env({'vcan0': SLAVES}, config=CONFIG % '', candump=True) as env:
+        c = env.connect()
+        lssd_signals(c)
+        s = SLAVES[1]  # node 6, the map says 6 (no scan needed: the device answers, lssd knows it then)
+        path = dev('vcan0', s)
+
+        # without the reset: pending, and the warning says so
+        old, stored, in_effect, msg, warning = env.call(B0, BUS_IFACE, 'UnassignNodeId', 'uuuua{sv}',
+                                                        *s.identity, 0)
+        expect_eq((old, stored, in_effect), (6, True, False), 'UnassignNodeId without reset')
+        expect('pending' in msg, 'message: ' + msg)
+        expect('keeps node-ID 6 until it is reset or power-cycled' in warning, 'warning: ' + warning)
+        expect('the map gives this device node-ID 6' in warning, 'warning (map): ' + warning)
+        expect_eq(env.get(path, DEVICE_IFACE, 'NodeId'), 6, 'NodeId until the reset')
+        expect(not c.wait_signal(lambda m: m.member == 'NodeIdAssigned', timeout=0.3), 'NodeIdAssigned too early')
+        if env.real:
+            st = env.slave_state('vcan0', s.serial)
+            expect_eq((st['active_node_id'], st['pending_node_id'], st['stored_node_id'], st['lss_state']),
+                      ('6', '255', '255', 'waiting'), 'slave without reset')
+
+        # with the reset: in effect, verified
+        old, stored, in_effect, msg, warning = env.call(B0, BUS_IFACE, 'UnassignNodeId', 'uuuua{sv}',
+                                                        *s.identity, 1, 'reset', 'b', True)
+        expect_eq((old, stored, in_effect), (6, True, True), 'UnassignNodeId with reset')
+        expect('runs non-configured now' in msg, 'message: ' + msg)
+        expect('until it is reset' not in warning, 'warning after the reset: ' + warning)
+        sig = c.wait_signal(lambda m: m.member == 'NodeIdAssigned')
+        expect(sig and sig.body == [path, 6, 255], 'NodeIdAssigned: %r' % (sig and sig.body))
+        expect_eq(env.get(path, DEVICE_IFACE, 'NodeId'), 255, 'NodeId after the reset')
+        expect_eq(env.get(path, DEVICE_IFACE, 'State'), 'non-configured', 'State after the reset')
+        if env.real:
+            st = env.slave_state('vcan0', s.serial)
+            expect_eq((st['active_node_id'], st['stored_node_id'], st['lss_state']), ('255', '255', 'waiting'),
+                      'slave after the reset')
+            nmt = [f for f in env.frames('vcan0') if f[1] == 0]
+            expect([0x82, 6] in [list(f[2]) for f in nmt], 'NMT Reset Communication of node 6: %r' % nmt)
+
+        # again: non-configured already, in effect, no reset needed
+        old, stored, in_effect, msg, warning = env.call(B0, BUS_IFACE, 'UnassignNodeId', 'uuuua{sv}',
+                                                        *s.identity, 1, 'reset', 'b', True)
+        expect_eq((old, stored, in_effect), (255, True, True), 'UnassignNodeId of a non-configured device')
+        expect('already' in msg, 'message: ' + msg)
+
+        # not stored: in effect now, the old node-ID back at the next power cycle
+        s2 = SLAVES[2]  # node 7
+        old, stored, in_effect, msg, warning = env.call(B0, BUS_IFACE, 'UnassignNodeId', 'uuuua{sv}',
+                                                        *s2.identity, 2, 'reset', 'b', True, 'store', 'b', False)
+        expect_eq((old, stored, in_effect), (7, False, True), 'UnassignNodeId store=false')
+        expect('node-ID 7 comes back at the next power cycle' in warning, 'warning: ' + warning)
+        if env.real:
+            st = env.slave_state('vcan0', s2.serial)
+            expect_eq((st['active_node_id'], st['stored_node_id']), ('255', '7'), 'slave store=false')
+
+        # nobody with that identity: a named error, nothing changed
+        name, msg = env.call_error(B0, BUS_IFACE, 'UnassignNodeId', 'uuuua{sv}', 1, 2, 3, 4, 0)
+        expect_eq(name, ERR + 'NotFound', 'unassigning an absent identity')
+        expect('00000001:00000002:00000003:00000004' in msg, 'NotFound message: ' + msg)
+        name, msg = env.call_error(B0, BUS_IFACE, 'UnassignNodeId', 'uuuua{sv}', *s.identity, 1,
+                                   'reset', 's', 'yes')
+        expect_eq(name, INVALID_ARGS, 'reset as a string')
+        expect("'reset'" in msg, 'InvalidArgs message: ' + msg)
+        if env.real:
+            expect(all_waiting(env, 'vcan0', SLAVES), 'slaves left in configuration')
+        env.alive()
+
+
 def test_autoassign():
     with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
         c = env.connect()
@@ -501,6 +570,8 @@ def test_bad_arguments():
             (B0, BUS_IFACE, 'AssignNodeId', ('uuuuya{sv}', 1, 2, 3, 4, 255, 0), INVALID_ARGS, 'node_id 255'),
             (B0, BUS_IFACE, 'AssignNodeId', ('uuuuya{sv}', 1, 2, 3, 4, 5, 1, 'store', 's', 'yes'), INVALID_ARGS,
              "'store'"),
+            (B0, BUS_IFACE, 'UnassignNodeId', ('uuuua{sv}', 1, 2, 3, 4, 1, 'verify', 'b', 'true'), INVALID_ARGS,
+             "Unknown option 'verify'"),
             (d, DEVICE_IFACE, 'AssignNodeId', ('ya{sv}', 0, 0), INVALID_ARGS, 'node_id 0'),
             (d, DEVICE_IFACE, 'AssignNodeId', ('ya{sv}', 5, 1, 'force', 's', 'yes'), INVALID_ARGS, "'force'"),
             (d, DEVICE_IFACE, 'AssignNodeId', ('ya{sv}', 5, 1, 'forced', 'b', 'true'), INVALID_ARGS, "'forced'"),
@@ -568,6 +639,7 @@ MUTATING = [
     (B0, BUS_IFACE, 'Scan', ('a{sv}', 0)),
     (B0, BUS_IFACE, 'AutoAssign', ('a{sv}', 0)),
     (B0, BUS_IFACE, 'AssignNodeId', ('uuuuya{sv}', 0xEC, 0x1234, 0x10002, 0x1276, 5, 0)),
+    (B0, BUS_IFACE, 'UnassignNodeId', ('uuuua{sv}', 0xEC, 0x1234, 0x10002, 0x1276, 0)),
     (B0, BUS_IFACE, 'SetBitrate', ('uqa{sv}', 250000, 10, 0)),
     (B0, BUS_IFACE, 'Acquire', ()),
     (B0, BUS_IFACE, 'SwitchModeGlobal', ('y', 1)),
@@ -966,6 +1038,7 @@ TESTS = {
     'scan': test_scan,
     'scan-options': test_scan_options,
     'assign': test_assign,
+    'unassign': test_unassign,
     'autoassign': test_autoassign,
     'autoassign-pool': test_autoassign_pool,
     'autoassign-boot': test_autoassign_boot,

@@ -390,6 +390,193 @@ START_TEST(fastscan_assign_with_late_answers) {
 }
 END_TEST
 
+/* ---- unassign: back to non-configured ---- */
+
+typedef struct unassign_trace {
+        membus *b;
+        unsigned configure_255, store, nmt;
+        uint8_t nmt_cs, nmt_node;
+        bool silence_after_nmt; /* the slave stops answering once reset */
+} unassign_trace;
+
+static void trace_unassign(void *ud, const lss_frame *f, uint64_t t) {
+        unassign_trace *u = ud;
+        uint8_t cs, node;
+        (void) t;
+        if (lss_is_request(f)) {
+                u->configure_255 += f->data[0] == LSS_CS_CONFIGURE_NODE_ID && f->data[1] == 0xFF;
+                u->store += f->data[0] == LSS_CS_STORE;
+        } else if (nmt_decode(f, &cs, &node)) {
+                u->nmt++;
+                u->nmt_cs = cs;
+                u->nmt_node = node;
+                if (u->silence_after_nmt)
+                        membus_slave(u->b, 0)->faults.silent = true;
+        }
+}
+
+/* CiA 305: Configure Node-ID 255 and Store leave a configured slave at its
+ * node-ID until it is reset: without the reset nothing says it took effect. */
+START_TEST(unassign_without_reset_is_pending) {
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 9, NULL);
+        unassign_trace u = { .b = b };
+        membus_set_trace(b, trace_unassign, &u);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_unassign(m, &ID1, LSS_UNASSIGN_STORE, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->node_id, 9);
+        ck_assert(r->changed);
+        ck_assert(r->stored);
+        ck_assert(!r->not_stored);
+        ck_assert(!r->in_effect);
+        lss_slave *s = membus_slave(b, 0);
+        ck_assert_uint_eq(s->st.active_node_id, 9);   /* still answers as 9 */
+        ck_assert_uint_eq(s->st.pending_node_id, 0xFF);
+        ck_assert_uint_eq(s->st.stored_node_id, 0xFF);
+        ck_assert_uint_eq(u.configure_255, 1);
+        ck_assert_uint_eq(u.store, 1);
+        ck_assert_uint_eq(u.nmt, 0);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* With the reset: NMT Reset Communication at the old node-ID, then the
+ * slave itself says 255. */
+START_TEST(unassign_with_reset_in_effect) {
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 9, NULL);
+        unassign_trace u = { .b = b };
+        membus_set_trace(b, trace_unassign, &u);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_unassign(m, &ID1, LSS_UNASSIGN_STORE | LSS_UNASSIGN_RESET, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->node_id, 9);
+        ck_assert(r->stored);
+        ck_assert(r->in_effect);
+        lss_slave *s = membus_slave(b, 0);
+        ck_assert_uint_eq(s->st.active_node_id, 0xFF);
+        ck_assert_uint_eq(s->st.stored_node_id, 0xFF);
+        ck_assert_uint_eq(u.nmt, 1);
+        ck_assert_uint_eq(u.nmt_cs, NMT_CS_RESET_COMMUNICATION);
+        ck_assert_uint_eq(u.nmt_node, 9);
+        ck_assert(all_waiting(b));
+        /* a power cycle keeps it non-configured: it was stored */
+        lss_slave_power_on(s, membus_now(b));
+        ck_assert_uint_eq(s->st.active_node_id, 0xFF);
+
+        /* without store: 255 now, the old node-ID back at the next power cycle */
+        membus_free(b);
+        b = membus_new(125000);
+        membus_add_slave(b, &ID1, 9, NULL);
+        ck_assert_int_eq(lss_master_unassign(m, &ID1, LSS_UNASSIGN_RESET, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert(!r->stored);
+        ck_assert(r->in_effect);
+        s = membus_slave(b, 0);
+        ck_assert_uint_eq(s->st.active_node_id, 0xFF);
+        ck_assert_uint_eq(s->st.stored_node_id, 9);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Non-configured already: 255 configured and stored again (its stored
+ * node-ID may differ), in effect without any reset. */
+START_TEST(unassign_non_configured) {
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, NULL);
+        unassign_trace u = { .b = b };
+        membus_set_trace(b, trace_unassign, &u);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_unassign(m, &ID1, LSS_UNASSIGN_STORE | LSS_UNASSIGN_RESET, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->node_id, 0xFF);
+        ck_assert(!r->changed);
+        ck_assert(r->stored);
+        ck_assert(r->in_effect);
+        ck_assert_uint_eq(u.nmt, 0);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+START_TEST(unassign_failures) {
+        lss_master *m = master_default();
+        lss_slave_faults f;
+
+        /* nobody with that identity */
+        membus *b = membus_new(125000);
+        lss_identity absent = ID1;
+        absent.serial = 1;
+        membus_add_slave(b, &ID1, 9, NULL);
+        ck_assert_int_eq(lss_master_unassign(m, &absent, LSS_UNASSIGN_STORE, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_NOT_FOUND);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.pending_node_id, 9);
+        ck_assert(all_waiting(b));
+        ck_assert_int_eq(lss_master_unassign(m, &ID1, 1u << 7, membus_now(b)), -EINVAL);
+        membus_free(b);
+
+        /* the device does not answer Configure Node-ID */
+        lss_slave_faults_default(&f);
+        f.ignore_cs = LSS_CS_CONFIGURE_NODE_ID;
+        b = membus_new(125000);
+        membus_add_slave(b, &ID1, 9, &f);
+        ck_assert_int_eq(lss_master_unassign(m, &ID1, LSS_UNASSIGN_STORE | LSS_UNASSIGN_RESET, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_NO_RESPONSE);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 9);
+        ck_assert(all_waiting(b));
+        membus_free(b);
+
+        /* a device that cannot store: 255 until its next power cycle, not a failure */
+        lss_slave_faults_default(&f);
+        f.store_unsupported = true;
+        b = membus_new(125000);
+        membus_add_slave(b, &ID1, 9, &f);
+        ck_assert_int_eq(lss_master_unassign(m, &ID1, LSS_UNASSIGN_STORE | LSS_UNASSIGN_RESET, membus_now(b)), 0);
+        r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert(r->not_stored);
+        ck_assert(!r->stored);
+        ck_assert(r->in_effect);
+        ck_assert_uint_eq(r->err, 1);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.stored_node_id, 9);
+        membus_free(b);
+
+        /* silent after the reset: configured and stored, but not seen at 255 */
+        b = membus_new(125000);
+        membus_add_slave(b, &ID1, 9, NULL);
+        unassign_trace u = { .b = b, .silence_after_nmt = true };
+        membus_set_trace(b, trace_unassign, &u);
+        uint64_t t0 = membus_now(b);
+        ck_assert_int_eq(lss_master_unassign(m, &ID1, LSS_UNASSIGN_STORE | LSS_UNASSIGN_RESET, t0), 0);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_VERIFY);
+        ck_assert(r->stored);
+        ck_assert(!r->in_effect);
+        ck_assert_uint_eq(r->node_id, 9);
+        ck_assert_ptr_nonnull(strstr(r->message, "did not answer"));
+        /* it gave up after the boot-up timeout, not at once and not much later */
+        lss_timing_config tc;
+        lss_timing_config_default(&tc);
+        ck_assert_uint_ge(membus_now(b) - t0, tc.bootup_timeout_us);
+        ck_assert_uint_lt(membus_now(b) - t0, 2 * tc.bootup_timeout_us);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 int main(void) {
         Suite *s = suite_create("assign");
         TCase *tc = tcase_create("assign");
@@ -405,6 +592,10 @@ int main(void) {
         tcase_add_test(tc, fastscan_assign_32);
         tcase_add_test(tc, fastscan_assign_early_config);
         tcase_add_test(tc, fastscan_assign_with_late_answers);
+        tcase_add_test(tc, unassign_without_reset_is_pending);
+        tcase_add_test(tc, unassign_with_reset_in_effect);
+        tcase_add_test(tc, unassign_non_configured);
+        tcase_add_test(tc, unassign_failures);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
