@@ -179,6 +179,13 @@ static void on_engine_progress(void *userdata, double p) {
                 set_progress(b, v);
 }
 
+static void on_engine_found(void *userdata, const lss_device *d) {
+        lssd_bus *b = userdata;
+        /* Scan announces devices; the scans inside AutoAssign and SetBitrate do not */
+        if (b->job && b->job->type == LSSD_JOB_SCAN)
+                lssd_scan_found(b, b->job, d);
+}
+
 /* ---- driving the engine ---- */
 
 static void bus_arm_timer(lssd_bus *b) {
@@ -878,6 +885,7 @@ int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **re
                 goto fail;
         }
         lss_master_set_progress(b->engine, on_engine_progress, b);
+        lss_master_set_found(b->engine, on_engine_found, b);
 
         r = bus_open_transport(b);
         if (r < 0) {

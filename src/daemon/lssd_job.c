@@ -60,6 +60,7 @@ lssd_job *lssd_job_free(lssd_job *j) {
         free(j->steps);
         free(j->pairs);
         free(j->found);
+        free(j->announced);
         free(j->map);
         free(j->br_devices);
         free(j);

@@ -63,6 +63,8 @@ struct lssd_job {
         size_t n_pairs;
         lss_device *found;           /* merged results of all stages */
         size_t n_found;
+        lss_identity *announced;     /* DeviceFound sent (when the engine confirmed them) */
+        size_t n_announced;
         bool scan_incomplete;        /* a stage failed: devices not found are not "missing" */
 
         /* AUTO_ASSIGN: the engine keeps a pointer to the plan and its map until the pass ends */

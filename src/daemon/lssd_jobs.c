@@ -425,9 +425,65 @@ static bool scan_covers(const lssd_job *j, const lssd_device *d) {
         return false;
 }
 
-static void scan_publish(lssd_bus *b, lssd_job *j, uint64_t now_realtime) {
-        sd_bus *bus = b->ctx->bus;
+/* The device object of a device the scan found, brought up to date
+ * (created when new); NULL when it could not be recorded. */
+static lssd_device *scan_record(lssd_bus *b, const lss_device *f, uint64_t now_realtime) {
+        lssd_device *d = NULL;
+        char ident[40];
+        int k = lssd_bus_get_device(b, &f->id, f->node_id, &d);
+        if (k < 0) {
+                log_error("%s: failed to record device %s: %s", b->ifname,
+                          lssd_identity_format(&f->id, ident, sizeof(ident)), strerror(-k));
+                return NULL;
+        }
+        lssd_heard_owner(&b->heard, f->node_id, &f->id);
+        if (d->node_id != f->node_id) {
+                d->node_id = f->node_id;
+                d->assigned = false;
+                d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
+        }
+        d->missing = false;
+        d->last_seen = now_realtime;
+        d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
+        return d;
+}
 
+static bool scan_announced(const lssd_job *j, const lss_identity *id) {
+        for (size_t i = 0; i < j->n_announced; i++)
+                if (lss_identity_equal(&j->announced[i], id))
+                        return true;
+        return false;
+}
+
+/* DeviceFound, and UnknownDevice when the map does not know it: once per
+ * device and job. */
+static void scan_announce(lssd_bus *b, lssd_job *j, const lss_device *f, const lssd_device *d) {
+        sd_bus *bus = b->ctx->bus;
+        lss_identity *a = realloc(j->announced, (j->n_announced + 1) * sizeof(*a));
+        if (a) {
+                j->announced = a;
+                j->announced[j->n_announced++] = f->id;
+        }
+        if (!bus)
+                return;
+        if (d)
+                (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "DeviceFound", "o", d->path);
+        if (!lssd_config_lookup_device(b->config, &f->id))
+                (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu", f->id.vendor,
+                                          f->id.product, f->id.revision, f->id.serial);
+}
+
+void lssd_scan_found(lssd_bus *b, lssd_job *j, const lss_device *f) {
+        if (scan_announced(j, &f->id))
+                return; /* by an earlier stage: the end brings its node-ID up to date */
+        lssd_device *d = scan_record(b, f, lssd_realtime_us());
+        if (!d)
+                return; /* tried again at the end */
+        lssd_bus_refresh_devices(b);
+        scan_announce(b, j, f, d);
+}
+
+static void scan_publish(lssd_bus *b, lssd_job *j, uint64_t now_realtime) {
         /* who was not found although the scan would have */
         if (!j->scan_incomplete)
                 for (lssd_device *d = b->devices; d; d = d->next) {
@@ -438,38 +494,20 @@ static void scan_publish(lssd_bus *b, lssd_job *j, uint64_t now_realtime) {
                                 d->missing = true;
                 }
 
+        /* Devices announced when they were found are up to date, unless a
+         * later stage read another node-ID; the others are recorded now. */
         for (size_t i = 0; i < j->n_found; i++) {
                 const lss_device *f = &j->found[i];
-                lssd_device *d = NULL;
-                char ident[40];
-                int k = lssd_bus_get_device(b, &f->id, f->node_id, &d);
-                if (k < 0) {
-                        log_error("%s: failed to record device %s: %s", b->ifname,
-                                  lssd_identity_format(&f->id, ident, sizeof(ident)), strerror(-k));
-                        continue;
-                }
-                lssd_heard_owner(&b->heard, f->node_id, &f->id);
-                if (d->node_id != f->node_id) {
-                        d->node_id = f->node_id;
-                        d->assigned = false;
-                        d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
-                }
-                d->missing = false;
-                d->last_seen = now_realtime;
-                d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
+                const lssd_device *d = lssd_bus_find_device(b, &f->id);
+                if (!scan_announced(j, &f->id) || !d || d->node_id != f->node_id)
+                        (void) scan_record(b, f, now_realtime);
         }
         lssd_bus_refresh_devices(b);
 
-        if (!bus)
-                return;
         for (size_t i = 0; i < j->n_found; i++) {
                 const lss_device *f = &j->found[i];
-                lssd_device *d = lssd_bus_find_device(b, &f->id);
-                if (d)
-                        (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "DeviceFound", "o", d->path);
-                if (!lssd_config_lookup_device(b->config, &f->id))
-                        (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu",
-                                                  f->id.vendor, f->id.product, f->id.revision, f->id.serial);
+                if (!scan_announced(j, &f->id))
+                        scan_announce(b, j, f, lssd_bus_find_device(b, &f->id));
         }
 }
 

@@ -15,5 +15,10 @@ int lssd_job_run(lssd_bus *b, lssd_job *j, const lss_result *r);
  * slowscan per vendor/product pair of j->pairs. Negative errno on failure. */
 int lssd_scan_stage_start(lssd_bus *b, const lssd_job *j);
 
+/* The engine confirmed a device during a scan job's stage
+ * (lss_master_set_found): its device object is created or updated and
+ * DeviceFound (and UnknownDevice) sent now, once per device and job. */
+void lssd_scan_found(lssd_bus *b, lssd_job *j, const lss_device *f);
+
 /* Ends a job that will not run (dropped from the queue) with an error reply. */
 void lssd_job_abort(lssd_job *j, const char *error_name, const char *message);

@@ -338,6 +338,11 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 if (m->result.status != LSS_OK)
                         goto out;
         }
+        if (s->confirm == CONFIRM_OK) {
+                /* confirmed by its own answers and now a candidate: tell the
+                 * caller at once (a slave set aside gets 255 back at the end) */
+                master_found(m, &s->found, s->node, s->cand[s->n_cand - 1].aside_node_id);
+        }
 reselect:
         /* Kept ones were let go by a switch to waiting in this round: the
          * selection (whenever one was kept before), an unclear round, or

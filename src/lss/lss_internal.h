@@ -167,6 +167,10 @@ struct lss_master {
         double prog_base, prog_span;
         unsigned expected_finds;  /* lss_master_set_expected_finds() */
         void *progress_ud;
+        lss_found_fn found_fn;    /* lss_master_set_found() */
+        void *found_ud;
+        lss_identity *announced;  /* identities found_fn was called for in this operation */
+        size_t n_announced, cap_announced;
 };
 
 /* step.c */
@@ -222,6 +226,9 @@ bool store_answer_ok(lss_master *m);
 /* master.c */
 void master_fail(lss_master *m, enum lss_status st, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 int master_add_device(lss_master *m, const lss_identity *id, uint8_t node_id);
+/* A device is confirmed: tell the caller (lss_master_set_found), once per
+ * identity in an operation. */
+void master_found(lss_master *m, const lss_identity *id, uint8_t node_id, uint8_t aside_node_id);
 void master_progress(lss_master *m, double p);
 
 /* procedures */
@@ -233,8 +240,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s);
 /* enumerate.c: Inquire Identity of the slave in configuration against
  * s->found (s->confirm, s->other) */
 int proc_confirm_found(lss_master *m, lss_scan_state *s);
-/* scan.c: selective switch + Inquire Node-ID of each candidate (slowscan) */
-int verify_candidates(lss_master *m, lss_scan_state *s);
+/* scan.c: selective switch + Inquire Node-ID of the last candidate (slowscan) */
+int verify_candidate(lss_master *m, lss_scan_state *s);
 int cand_add(lss_scan_state *s, const lss_identity *id);
 int proc_slowscan(lss_master *m, lss_scan_state *s);
 int proc_autoassign(lss_master *m);

@@ -43,6 +43,7 @@ void lss_master_free(lss_master *m) {
         if (!m)
                 return;
         free(m->devices);
+        free(m->announced);
         free(m->sc.stack);
         free(m->sc.cand);
         lss_autoassign_free_state(m);
@@ -68,6 +69,32 @@ void master_progress(lss_master *m, double p) {
         p = p < 0 ? 0 : p > 1 ? 1 : p;
         if (m->progress)
                 m->progress(m->progress_ud, m->prog_base + m->prog_span * p);
+}
+
+void lss_master_set_found(lss_master *m, lss_found_fn fn, void *userdata) {
+        m->found_fn = fn;
+        m->found_ud = userdata;
+}
+
+void master_found(lss_master *m, const lss_identity *id, uint8_t node_id, uint8_t aside_node_id) {
+        for (size_t i = 0; i < m->n_announced; i++)
+                if (lss_identity_equal(&m->announced[i], id))
+                        return;
+        if (m->n_announced == m->cap_announced) {
+                size_t cap = m->cap_announced ? m->cap_announced * 2 : 16;
+                lss_identity *a = realloc(m->announced, cap * sizeof(*a));
+                if (a) {
+                        m->announced = a;
+                        m->cap_announced = cap;
+                }
+        }
+        /* out of memory: announced, just not remembered */
+        if (m->n_announced < m->cap_announced)
+                m->announced[m->n_announced++] = *id;
+        if (m->found_fn) {
+                lss_device d = { .id = *id, .node_id = node_id, .aside_node_id = aside_node_id };
+                m->found_fn(m->found_ud, &d);
+        }
 }
 
 void lss_master_set_expected_finds(lss_master *m, unsigned n) {
@@ -153,6 +180,7 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
         m->sc.restore = false;
         m->now = now;
         m->n_devices = 0;
+        m->n_announced = 0;
         m->txq_head = m->txq_len = 0;
         memset(&m->result, 0, sizeof(m->result));
         m->result.node_id = LSS_NODE_ID_UNCONFIGURED;

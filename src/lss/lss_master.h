@@ -129,6 +129,19 @@ typedef bool (*lss_taken_fn)(void *userdata, uint8_t node_id, const lss_identity
 /* An assignment with LSS_ASSIGN_CHECK_FREE and a checked Configure Node-ID
  * refuse a node-ID `fn` says is taken before they probe; NULL: none. */
 void lss_master_set_taken_check(lss_master *m, lss_taken_fn fn, void *userdata);
+/* A device a scan found, the moment it is confirmed: enumeration once its
+ * identity was read back from exactly one slave (Inquire Identity, or a
+ * selective switch) and its node-ID asked; slowscan once it answered the
+ * selective switch and its node-ID inquiry. Never for a made-up candidate
+ * nobody confirms. Called at most once per identity per operation (a pass
+ * that is run again does not repeat it), also in the enumerations and
+ * slowscans of AutoAssign. `d->node_id` is what the result will say (255 for
+ * a slave set aside: it gets 255 back); the result can still leave out a
+ * device announced here when it fails the final verification (e.g. it left
+ * the bus). Called from inside lss_master_on_frame/on_time/start: do not
+ * start or cancel operations from it. */
+typedef void (*lss_found_fn)(void *userdata, const lss_device *d);
+void lss_master_set_found(lss_master *m, lss_found_fn fn, void *userdata);
 /* How many slaves an enumeration (Scan, AutoAssign) will likely find, e.g.
  * the non-configured devices seen last time: its progress is measured
  * against it (0, or more found: twice as many as found so far). */

@@ -5,10 +5,11 @@
  * whole range 1 + cfg.retries times) before it is dropped: a missed answer
  * would lose a slave silently. A range that answered but neither of whose
  * halves did lost an answer on the way: it is split and asked again (up to
- * cfg.retries times), and reported if that never resolves. Candidates are
- * verified by selective switch (the 0x44 answer can only come from a slave
- * with that exact identity) and asked their node-ID; a step nobody answers
- * is asked again: one late or lost frame must not cost a slave.
+ * cfg.retries times), and reported if that never resolves. A candidate is
+ * verified as soon as the bisection singles it out, by selective switch (the
+ * 0x44 answer can only come from a slave with that exact identity), and
+ * asked its node-ID, then announced (lss_master_set_found); a step nobody
+ * answers is asked again: one late or lost frame must not cost a slave.
  * (Enumeration by fastscan is in lss_enumerate.c.) */
 #include <errno.h>
 #include <stdlib.h>
@@ -70,37 +71,36 @@ static lss_range_item parent_of(const lss_range_item *hi) {
         return p;
 }
 
-/* Selective switch to each candidate, read its node-ID, back to waiting.
- * Verified ones become result devices; the others are counted in `dropped`. */
-int verify_candidates(lss_master *m, lss_scan_state *s) {
+/* Selective switch to the candidate just found, read its node-ID, back to
+ * waiting: verified, it is a result device and announced at once (the
+ * bisection goes on from waiting state); else it is counted in `dropped`. */
+int verify_candidate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->vpc);
-        s->dropped = 0;
-        for (s->i = 0; s->i < s->n_cand; s->i++) {
-                SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->i].id);
-                if (!step_answered(m)) {
-                        s->dropped++;
-                        continue;
-                }
-                REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
-                                LSS_CS_INQUIRE_NODE_ID);
-                if (step_answered(m) && !step_conflict(m)) {
-                        s->cand[s->i].node_id = m->step.answer.data[1];
-                        if (master_add_device(m, &s->cand[s->i].id, s->cand[s->i].node_id) < 0) {
-                                master_fail(m, LSS_E_INCOMPLETE, "out of memory");
-                                break;
-                        }
-                } else
-                        s->dropped++;
-                STEP_REQUEST(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
-                master_progress(m, 0.9 + 0.1 * (s->i + 1) / (double) s->n_cand);
+        SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->n_cand - 1].id);
+        if (!step_answered(m)) {
+                s->dropped++;
+                goto out;
         }
+        REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                        LSS_CS_INQUIRE_NODE_ID);
+        if (step_answered(m) && !step_conflict(m)) {
+                lss_device *c = &s->cand[s->n_cand - 1];
+                c->node_id = m->step.answer.data[1];
+                if (master_add_device(m, &c->id, c->node_id) < 0)
+                        master_fail(m, LSS_E_INCOMPLETE, "out of memory");
+                else
+                        master_found(m, &c->id, c->node_id, 0);
+        } else
+                s->dropped++;
+        STEP_REQUEST(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
+out:;
         PT_END(&s->vpc);
 }
 
 int proc_slowscan(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->n_cand = s->n_stack = 0;
-        s->unresolved = 0;
+        s->unresolved = s->dropped = 0;
         m->n_devices = 0;
         if (stack_push(s, (lss_range_item) { .rlo = s->range.rev_lo, .rhi = s->range.rev_hi,
                                              .slo = s->range.serial_lo, .shi = s->range.serial_hi,
@@ -149,15 +149,22 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
                         lss_identity id = { s->range.vendor, s->range.product, s->cur.rlo, s->cur.slo };
                         if (cand_add(s, &id) < 0)
                                 goto oom;
+                        s->vpc = 0;
+                        PT_CALL(&s->pc, verify_candidate(m, s));
+                        if (m->result.status != LSS_OK)
+                                goto out;
                         continue;
                 }
                 if (split(s, &s->cur, 0) < 0)
                         goto oom;
         }
-        s->vpc = 0;
-        PT_CALL(&s->pc, verify_candidates(m, s));
-        if (m->result.status != LSS_OK)
-                goto out;
+        if (s->n_cand > 0) {
+                /* Each verification ended with a switch to waiting, and the
+                 * later ones gave earlier slaves another; the last slave
+                 * verified had only its own: once more, so that one frame it
+                 * lost does not leave it in configuration. */
+                STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
+        }
         if (s->unresolved > 0) {
                 if (s->dropped > 0)
                         master_fail(m, LSS_E_INCOMPLETE,

@@ -254,6 +254,7 @@ class Connection:
                     if not msg:
                         break
                     data = data[used:]
+                    msg.received = time.monotonic()
                     with self.lock:
                         if msg.type in (METHOD_RETURN, ERROR):
                             self.replies[msg.reply_serial] = msg

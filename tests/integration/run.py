@@ -1018,6 +1018,44 @@ def test_progress():
                 expect(all(abs(p - s) <= 0.15 for s, p in shares if s <= 0.9), 'not with the work: %r' % shares)
 
 
+def test_scan_found_early():
+    """DeviceFound comes when a device is found, not at the end (issue 21):
+    during a Scan of 12 devices (10 non-configured, found by the fastscan
+    enumeration; 2 configured, found by the slowscan of their vendor/product,
+    which finds the non-configured ones again) the signals arrive spread over
+    the Scan, the first before half of its time, each before JobFinished, one
+    per device (none again at the end), matching the reply."""
+    slaves = [Slave(0xEC, 0x1234, 1, 0x100 + i) for i in range(10)]
+    slaves += [Slave(0xEC, 0x1234, 2, 0x200 + i, 20 + i) for i in range(2)]
+    with Env({'vcan0': slaves}) as env:
+        c = env.connect()
+        lssd_signals(c)
+        t0 = time.monotonic()
+        serial = c.send(SERVICE, B0, BUS_IFACE, 'Scan', 'a{sv}', [{'vendor': ('u', 0xEC), 'product': ('u', 0x1234)}])
+        found = c.wait_reply(serial)[0]
+        done = c.wait_signal(lambda m: m.member == 'JobFinished')
+        expect(done and done.body == ['Scan', 'done'], 'JobFinished: %r' % (done and done.body))
+        # anything sent after the reply (a second DeviceFound) has come by now
+        time.sleep(0.5)
+        expect_eq(sorted(tuple(f) for f in found), sorted(s.identity + (s.node_id,) for s in slaves), 'Scan result')
+        total = done.received - t0
+        with c.lock:
+            signals = list(c.signals)
+        dfound = [m for m in signals if m.member == 'DeviceFound']
+        shares = [(m.received - t0) / total for m in dfound]
+        log('Scan %.1f s, DeviceFound at %s' % (total, ' '.join('%.2f' % x for x in shares)))
+        paths = [m.body[0] for m in dfound]
+        expect_eq(sorted(paths), sorted(device_path('vcan0', *f[:4]) for f in found), 'DeviceFound paths')
+        expect_eq(len(set(paths)), len(paths), 'one DeviceFound per device')
+        # one reader thread: received in the order sent
+        expect(all(m.received < done.received for m in dfound), 'DeviceFound after JobFinished')
+        expect(shares and shares[0] < 0.5, 'the first DeviceFound at %.2f of the Scan' % (shares[0] if shares else 1))
+        # spread over the Scan, not in a burst at its end
+        expect(shares and shares[len(shares) // 2] < 0.8, 'half the DeviceFound only at the end: %r' % shares)
+        unknown = [tuple(m.body) for m in signals if m.member == 'UnknownDevice']
+        expect_eq(sorted(unknown), sorted(s.identity for s in slaves), 'one UnknownDevice per device')
+
+
 def test_startup_order():
     """Objects, then the name, then frames: a client that sees the name sees
     every bus already (no InterfacesAdded for a bus after the name appears;
@@ -1054,6 +1092,7 @@ TESTS = {
     'second-instance': test_second_instance,
     'check-config': test_check_config,
     'progress': test_progress,
+    'scan-found-early': test_scan_found_early,
     'startup-order': test_startup_order,
     'reload': test_reload,
     'bus-down': test_bus_down,

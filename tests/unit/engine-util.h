@@ -83,6 +83,53 @@ static inline void assert_devices_real(membus *b, const lss_result *r) {
         }
 }
 
+/* What lss_master_set_found() announced, and when (virtual time, LSS
+ * requests on the bus so far). Every announcement must be a real slave of
+ * the bus, announced once. */
+#define FOUND_LOG_MAX 256
+typedef struct found_log {
+        membus *bus;
+        size_t n;
+        lss_device dev[FOUND_LOG_MAX];
+        uint64_t at[FOUND_LOG_MAX], requests[FOUND_LOG_MAX];
+} found_log;
+
+static inline void found_log_cb(void *ud, const lss_device *d) {
+        found_log *l = ud;
+        ck_assert_msg(membus_find(l->bus, &d->id) != NULL,
+                      "announced %08x:%08x:%08x:%08x, which is not on the bus", d->id.vendor, d->id.product,
+                      d->id.revision, d->id.serial);
+        for (size_t i = 0; i < l->n; i++)
+                ck_assert_msg(!lss_identity_equal(&l->dev[i].id, &d->id), "%08x announced twice", d->id.serial);
+        ck_assert_uint_lt(l->n, FOUND_LOG_MAX);
+        l->dev[l->n] = *d;
+        l->at[l->n] = membus_now(l->bus);
+        l->requests[l->n] = membus_get_stats(l->bus)->lss_requests;
+        l->n++;
+}
+
+static inline void found_log_start(found_log *l, lss_master *m, membus *b) {
+        memset(l, 0, sizeof(*l));
+        l->bus = b;
+        lss_master_set_found(m, found_log_cb, l);
+}
+
+/* Each result device was announced, with its node-ID, before the end
+ * (`end`: the virtual time the operation ended); when `exact`, nothing else
+ * was. */
+static inline void found_log_check(const found_log *l, const lss_result *r, uint64_t end, bool exact) {
+        for (size_t i = 0; i < r->n_devices; i++) {
+                size_t k = 0;
+                while (k < l->n && !lss_identity_equal(&l->dev[k].id, &r->devices[i].id))
+                        k++;
+                ck_assert_msg(k < l->n, "result device %08x not announced", r->devices[i].id.serial);
+                ck_assert_uint_eq(l->dev[k].node_id, r->devices[i].node_id);
+                ck_assert_uint_lt(l->at[k], end);
+        }
+        if (exact)
+                ck_assert_uint_eq(l->n, r->n_devices);
+}
+
 static inline int run_suite(Suite *s) {
         SRunner *sr = srunner_create(s);
         srunner_run_all(sr, CK_NORMAL);

@@ -39,11 +39,15 @@ START_TEST(scan_canopennode) {
         lss_slave_faults f = canopennode();
         membus *b = bus_random(4, 901, 0, 0, &f);
         lss_master *m = master_default();
+        found_log fl;
+        found_log_start(&fl, m, b);
         ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
         const lss_result *r = lss_drive(m, b, 120 * SECOND, NULL, NULL);
         ck_assert_msg(r->status == LSS_OK, "%s", r->message);
         ck_assert_uint_eq(r->n_devices, 4);
         assert_devices_real(b, r);
+        /* announced once each although they answer every Fastscan, with 255 */
+        found_log_check(&fl, r, membus_now(b), true);
         for (size_t i = 0; i < 4; i++) {
                 assert_untouched(b, i);
                 ck_assert_uint_ge(r->devices[i].aside_node_id, 1);
@@ -133,6 +137,8 @@ START_TEST(fastscan_any_is_named) {
                  w->id.serial);
         for (int pass = 0; pass < 2; pass++) {
                 lss_master *m = master_default();
+                found_log fl; /* what it announces is real, each once (found_log_cb) */
+                found_log_start(&fl, m, b);
                 lss_autoassign_plan p = { .unknown = LSS_UNKNOWN_POOL, .pool_lo = 20, .pool_hi = 40, .store = true };
                 if (pass == 0)
                         ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
@@ -231,10 +237,14 @@ START_TEST(cancel_gives_back) {
         membus *b = bus_random(4, 908, 0, 0, &f);
         lss_master *m = master_default();
         cancel_at c = { false };
+        found_log fl;
+        found_log_start(&fl, m, b);
         ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
         const lss_result *r = lss_drive(m, b, 120 * SECOND, cancel_after_two, &c);
         ck_assert(c.done);
         ck_assert_int_eq(r->status, LSS_E_CANCELLED);
+        /* the two set aside before the cancel were announced then */
+        ck_assert_uint_ge(fl.n, 2);
         for (size_t i = 0; i < 4; i++)
                 assert_untouched(b, i);
         lss_master_free(m);
