@@ -707,7 +707,8 @@ def test_unprivileged():
         expect_eq(len(ctl.ok('list', '--json', **nobody).json), 1, 'list as nobody')
         for args in (('scan',), ('assign', '0x1276', '5'), ('auto-assign',), ('set-bitrate', '250k'), ('reload',),
                      ('raw', 'inquire-node-id')):
-            r = ctl.fails('access-denied', "permission denied: this needs root or membership in group 'lssd'",
+            r = ctl.fails('access-denied', "permission denied: lssd allows this to root and group 'lssd' "
+                          "(usermod -aG lssd USER, then log in again)",
                           *args, **nobody)
             # the point, not dbus-daemon's ~300 characters of matched rule
             expect(len(r.err) < 160 and 'Rejected send message' not in r.err, 'a long refusal: %r' % r.err)
