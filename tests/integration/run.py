@@ -875,6 +875,33 @@ def test_bus_down():
 
 
 
+def test_no_interface():
+    """An interface that is not there says why in the journal, not only
+    'link gone': no such interface, or no CAN in this kernel at all (issue 21).
+    The real SocketCAN lssd on either backend: it needs no CAN to say so."""
+    import socket
+    ifname = 'lssdnone0'
+    try:
+        socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW).close()
+        has_can = True
+    except (OSError, AttributeError):
+        has_can = False
+    if os.path.exists('/sys/class/net/' + ifname):
+        raise Skip('%s exists here' % ifname)
+    with Env({ifname: []}, absent={ifname}, start_lssd=False) as env:
+        env.real = True  # no --simulate: the SocketCAN path is the point
+        env._start_lssd()
+        path = bus_path(ifname)
+        expect_eq(env.get(path, BUS_IFACE, 'State'), 'down', 'State of a bus without its interface')
+        out = env.lssd_output()
+        if has_can:
+            want = '%s: serving (SocketCAN, link gone): no interface %s (yet)' % (ifname, ifname)
+        else:
+            want = '%s: serving (SocketCAN, link gone): this kernel has no CAN support' % ifname
+        expect(want in out, 'why the link is gone (%s): %r' % ('CAN kernel' if has_can else 'no CAN', out))
+        env.alive()
+
+
 def test_check_config():
     """lssd --check-config as lssd(8) says: FILE as a word or with '=', the
     map it read shown line by line, an extra word named, no file at all an
@@ -982,6 +1009,7 @@ TESTS = {
     'startup-order': test_startup_order,
     'reload': test_reload,
     'bus-down': test_bus_down,
+    'no-interface': test_no_interface,
 }
 
 if __name__ == '__main__':
