@@ -738,6 +738,11 @@ static const char *device_state(lssd_bus *b, const lssd_device *d) {
 }
 
 int lssd_bus_get_device(lssd_bus *b, const lss_identity *id, uint8_t node_id, lssd_device **ret) {
+        return lssd_bus_get_device_full(b, id, true, node_id, ret);
+}
+
+int lssd_bus_get_device_full(lssd_bus *b, const lss_identity *id, bool revision_known, uint8_t node_id,
+                             lssd_device **ret) {
         lssd_device *d = lssd_bus_find_device(b, id);
         int r;
 
@@ -748,6 +753,7 @@ int lssd_bus_get_device(lssd_bus *b, const lss_identity *id, uint8_t node_id, ls
         r = lssd_device_new(b, b->ifname, id, &d);
         if (r < 0)
                 return r;
+        d->revision_unknown = !revision_known; /* before the object is announced: RevisionKnown is const */
         d->node_id = node_id;
         d->mapped_node_id = mapped_node_id(b, id);
         d->last_seen = lssd_realtime_us();

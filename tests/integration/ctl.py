@@ -464,6 +464,12 @@ def test_auto_assign_partial():
         r = ctl('auto-assign', '--quiet')
         expect_eq((r.rc, r.out), (EXIT['partial'], ''), 'auto-assign --quiet: nothing on stdout (%r)' % r.err)
         expect('device 0x0000009a:0x00000003:0x00000000:0x00000011 missing' in r.err, 'problems still said: %r' % r.err)
+        # never seen, and the map has no revision: list shows it unknown, not 0x00000000 (issue 21)
+        out = ctl.ok('list').out
+        expect(re.search(r'^vcan0 +0x0000009a +0x00000003 +- +0x00000011 +- +7 +missing', out, re.M),
+               'the missing device in list: %r' % out)
+        got = [(x['serial'], x['revision_known']) for x in ctl.ok('list', '--json').json]
+        expect((17, False) in got and all(k for s, k in got if s != 17), 'revision_known in list --json: %r' % got)
 
 
 def test_set_bitrate():

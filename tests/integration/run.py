@@ -341,6 +341,9 @@ def test_autoassign_pool():
         absent = device_path('vcan0', 0x9A, 3, 0, 17)
         expect_eq(env.get(absent, DEVICE_IFACE, 'State'), 'missing', 'State of an absent slave')
         expect_eq(env.get(absent, DEVICE_IFACE, 'MappedNodeId'), 7, 'MappedNodeId of an absent slave')
+        # ... whose revision 0 means nothing: RevisionKnown says so (issue 21)
+        expect_eq(env.get(absent, DEVICE_IFACE, 'RevisionKnown'), False, 'RevisionKnown of an absent slave')
+        expect_eq(env.get(dev('vcan0', SLAVES[0]), DEVICE_IFACE, 'RevisionKnown'), True, 'RevisionKnown of a found one')
         expect_eq(env.get(dev('vcan0', SLAVES[0]), DEVICE_IFACE, 'State'), 'assigned', 'State after the pass')
         env.alive()
 
