@@ -337,6 +337,8 @@ def test_autoassign_pool():
         expect_eq(outcomes.get(17), ('missing', 0, 0, outcomes.get(17, ('',) * 4)[3]), 'outcome of the absent slave')
         expect_eq(result, 'partial', 'AutoAssign result with a mapped device missing')
         expect_eq(env.get(dev('vcan0', SLAVES[3]), DEVICE_IFACE, 'NodeId'), 100, 'NodeId from the pool')
+        # the journal's and AutoAssign's word for it, and lssctl list's too
+        expect_eq(env.get(dev('vcan0', SLAVES[3]), DEVICE_IFACE, 'State'), 'pool', 'State of a pool device')
         # never seen, and the map has no revision: the object has the map's identity
         absent = device_path('vcan0', 0x9A, 3, 0, 17)
         expect_eq(env.get(absent, DEVICE_IFACE, 'State'), 'missing', 'State of an absent slave')
