@@ -36,8 +36,8 @@ EXIT = {
 # the bus and map of the D-Bus tests (run.py), so both check the same devices
 from run import CONFIG, SLAVES, VCAN1  # noqa: E402
 
-JSON_DEVICE_KEYS = ['bus', 'vendor', 'product', 'revision', 'serial', 'node_id', 'mapped_node_id', 'state',
-                    'last_seen', 'path']
+JSON_DEVICE_KEYS = ['bus', 'vendor', 'product', 'revision', 'serial', 'revision_known', 'node_id', 'mapped_node_id',
+                    'state', 'last_seen', 'path']
 JSON_BUS_KEYS = ['interface', 'state', 'bitrate', 'job', 'progress', 'queue_length', 'devices', 'device_states',
                  'last_pass']
 
