@@ -24,7 +24,7 @@ const ctl_error_info ctl_error_table[] = {
         { LSS_ERR("NotHeld"), CTL_EXIT_NOT_HELD, "the bus is not held: raw services need Acquire() first" },
         { DBUS_ERR("InvalidArgs"), CTL_EXIT_USAGE, "invalid argument" },
         { DBUS_ERR("AccessDenied"), CTL_EXIT_ACCESS_DENIED,
-          "permission denied: this needs root or membership in group 'lssd'" },
+          "permission denied: lssd allows this to root and group 'lssd' (usermod -aG lssd USER, then log in again)" },
         { DBUS_ERR("InvalidFileContent"), CTL_EXIT_BAD_CONFIG,
           "the configuration file is invalid; lssd keeps the previous one" },
         { DBUS_ERR("ServiceUnknown"), CTL_EXIT_NOT_RUNNING, "lssd is not running" },

@@ -121,6 +121,12 @@ static int device_prop(sd_bus_message *m, const char *name, void *userdata) {
                 return read_typed(m, 'y', &d->mapped_node_id);
         if (strcmp(name, "LastSeen") == 0)
                 return read_typed(m, 't', &d->last_seen);
+        if (strcmp(name, "RevisionKnown") == 0) {
+                int known = 1;
+                r = read_typed(m, 'b', &known);
+                d->revision_unknown = r > 0 && !known;
+                return r;
+        }
         if (strcmp(name, "State") == 0)
                 return (r = read_string(m, &d->state)) < 0 ? r : 1;
         return 0;

@@ -28,6 +28,7 @@ typedef struct ctl_device_info {
         char *path;
         char *ifname;             /* of its bus */
         uint32_t id[4];           /* vendor, product, revision, serial */
+        bool revision_unknown;    /* RevisionKnown false: id[2] means nothing */
         uint8_t node_id;          /* 255: non-configured */
         uint8_t mapped_node_id;   /* 0: not in the map */
         char *state;

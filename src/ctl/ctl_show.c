@@ -237,8 +237,15 @@ void ctl_json_identity(ctl_json *j, const uint32_t id[4]) {
 }
 
 void ctl_table_identity(ctl_table *t, const uint32_t id[4]) {
+        ctl_table_identity_full(t, id, true);
+}
+
+void ctl_table_identity_full(ctl_table *t, const uint32_t id[4], bool revision_known) {
         for (size_t i = 0; i < 4; i++)
-                ctl_table_add(t, NULL, "0x%08" PRIx32, id[i]);
+                if (i == 2 && !revision_known)
+                        ctl_table_add(t, NULL, "-");
+                else
+                        ctl_table_add(t, NULL, "0x%08" PRIx32, id[i]);
 }
 
 static void list_json(ctl_context *c, const ctl_objects *o) {
@@ -254,6 +261,8 @@ static void list_json(ctl_context *c, const ctl_objects *o) {
                 ctl_json_key(&j, "bus");
                 ctl_json_string(&j, d->ifname);
                 ctl_json_identity(&j, d->id);
+                ctl_json_key(&j, "revision_known");
+                ctl_json_bool(&j, !d->revision_unknown);
                 ctl_json_key(&j, "node_id");
                 ctl_json_uint(&j, d->node_id);
                 ctl_json_key(&j, "mapped_node_id");
@@ -288,7 +297,7 @@ static int list_text(ctl_context *c, const ctl_objects *o) {
                         continue;
                 ctl_format_time(d->last_seen, when, sizeof(when));
                 ctl_table_add(t, NULL, "%s", d->ifname);
-                ctl_table_identity(t, d->id);
+                ctl_table_identity_full(t, d->id, !d->revision_unknown);
                 if (d->node_id == 0xFF)
                         ctl_table_add(t, NULL, "-");
                 else

@@ -2,6 +2,7 @@
 /* Pieces of output the verbs share. */
 #pragma once
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -16,3 +17,5 @@ void ctl_format_time(uint64_t usec, char *buf, size_t size);
 void ctl_json_identity(ctl_json *j, const uint32_t id[4]);
 /* Four cells, 0x%08x each. */
 void ctl_table_identity(ctl_table *t, const uint32_t id[4]);
+/* The same, with "-" for a revision that is not known (RevisionKnown false). */
+void ctl_table_identity_full(ctl_table *t, const uint32_t id[4], bool revision_known);

@@ -646,7 +646,11 @@ static void bus_after_link_change(lssd_bus *b) {
                 bus_process(b);
                 return;
         }
-        log_notice("%s: link %s", b->ifname, lss_link_state_to_string(now_state));
+        if (now_state == LSS_LINK_GONE)
+                log_notice("%s: link gone: no interface %s any more; served again when it appears", b->ifname,
+                           b->ifname);
+        else
+                log_notice("%s: link %s", b->ifname, lss_link_state_to_string(now_state));
         if (now_state != LSS_LINK_UP && b->engine_running) {
                 char why[64];
                 snprintf(why, sizeof(why), "%s went %s", b->ifname, lss_link_state_to_string(now_state));
@@ -744,6 +748,11 @@ static const char *device_state(lssd_bus *b, const lssd_device *d) {
 }
 
 int lssd_bus_get_device(lssd_bus *b, const lss_identity *id, uint8_t node_id, lssd_device **ret) {
+        return lssd_bus_get_device_full(b, id, true, node_id, ret);
+}
+
+int lssd_bus_get_device_full(lssd_bus *b, const lss_identity *id, bool revision_known, uint8_t node_id,
+                             lssd_device **ret) {
         lssd_device *d = lssd_bus_find_device(b, id);
         int r;
 
@@ -754,6 +763,7 @@ int lssd_bus_get_device(lssd_bus *b, const lss_identity *id, uint8_t node_id, ls
         r = lssd_device_new(b, b->ifname, id, &d);
         if (r < 0)
                 return r;
+        d->revision_unknown = !revision_known; /* before the object is announced: RevisionKnown is const */
         d->node_id = node_id;
         d->mapped_node_id = mapped_node_id(b, id);
         d->last_seen = lssd_realtime_us();
@@ -907,12 +917,17 @@ int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **re
 
         b->state = lssd_bus_state(b);
         b->bitrate = lssd_bus_bitrate(b);
-        log_info("%s: serving (%s, link %s)", b->ifname, b->sim ? "simulated" : "SocketCAN",
-                 lss_link_state_to_string(b->link));
+        /* "link gone" alone does not say why: no such interface, or no CAN in this kernel at all */
         if (!b->sim && b->link == LSS_LINK_GONE && !socketcan_kernel_has_can(NULL))
-                log_warning("%s: this kernel has no CAN support (no AF_CAN sockets): the interface cannot appear "
-                            "until the can and can-raw modules are there (modprobe can-raw); lssd --simulate runs "
-                            "without CAN", b->ifname);
+                log_warning("%s: serving (SocketCAN, link gone): this kernel has no CAN support (no AF_CAN "
+                            "sockets; modprobe can can-raw?): %s cannot appear until it has; lssd --simulate "
+                            "runs without CAN", b->ifname, b->ifname);
+        else if (!b->sim && b->link == LSS_LINK_GONE)
+                log_notice("%s: serving (SocketCAN, link gone): no interface %s (yet); served when it appears",
+                           b->ifname, b->ifname);
+        else
+                log_info("%s: serving (%s, link %s)", b->ifname, b->sim ? "simulated" : "SocketCAN",
+                         lss_link_state_to_string(b->link));
 
         /* a crash may have left slaves in configuration state */
         if (b->link == LSS_LINK_UP)

@@ -145,6 +145,10 @@ int lssd_bus_method_assign(lssd_bus *b, sd_bus_message *m, const lss_identity *i
 lssd_device *lssd_bus_find_device(lssd_bus *b, const lss_identity *id);
 /* The device with this identity, created (with node_id) and announced if new. */
 int lssd_bus_get_device(lssd_bus *b, const lss_identity *id, uint8_t node_id, lssd_device **ret);
+/* The same; a new one made with !revision_known (from a map entry without
+ * revision, never seen) publishes RevisionKnown false. */
+int lssd_bus_get_device_full(lssd_bus *b, const lss_identity *id, bool revision_known, uint8_t node_id,
+                             lssd_device **ret);
 /* Recomputes mapped node-IDs and states of every device and emits
  * PropertiesChanged for what changed. */
 void lssd_bus_refresh_devices(lssd_bus *b);

@@ -23,6 +23,9 @@ struct lssd_device {
         lssd_bus *bus;
         lssd_device *next;
         lss_identity id;
+        /* only known from a map entry without revision (a missing device never
+         * seen): id.revision is 0 and means nothing (RevisionKnown false) */
+        bool revision_unknown;
         char *path;
         uint8_t node_id;        /* last known; 0xFF non-configured */
         uint8_t mapped_node_id; /* from the bus's map; 0 = not in the map */

@@ -11,6 +11,12 @@ static int property_get_state(sd_bus *bus, const char *path, const char *interfa
         return sd_bus_message_append(reply, "s", d->state);
 }
 
+static int property_get_revision_known(sd_bus *bus, const char *path, const char *interface, const char *property,
+                                       sd_bus_message *reply, void *userdata, sd_bus_error *error) {
+        const lssd_device *d = userdata;
+        return sd_bus_message_append(reply, "b", !d->revision_unknown);
+}
+
 static int method_assign_node_id(sd_bus_message *m, void *userdata, sd_bus_error *error) {
         lssd_device *d = userdata;
         lssd_assign_options o;
@@ -38,6 +44,7 @@ const sd_bus_vtable lssd_device_vtable[] = {
         SD_BUS_PROPERTY("RevisionNumber", "u", NULL, offsetof(lssd_device, id.revision),
                         SD_BUS_VTABLE_PROPERTY_CONST),
         SD_BUS_PROPERTY("SerialNumber", "u", NULL, offsetof(lssd_device, id.serial), SD_BUS_VTABLE_PROPERTY_CONST),
+        SD_BUS_PROPERTY("RevisionKnown", "b", property_get_revision_known, 0, SD_BUS_VTABLE_PROPERTY_CONST),
         SD_BUS_PROPERTY("NodeId", "y", NULL, offsetof(lssd_device, node_id), SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("MappedNodeId", "y", NULL, offsetof(lssd_device, mapped_node_id),
                         SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),

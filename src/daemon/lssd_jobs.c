@@ -621,6 +621,17 @@ static bool autoassign_mark_missing(lssd_bus *b, const lssd_job *j, const lss_ou
         return marked;
 }
 
+/* A missing device's identity is the map's: without a revision there, its
+ * revision (0) is not known. */
+static bool outcome_revision_known(const lssd_job *j, const lss_outcome *o) {
+        if (o->kind != LSS_OUTCOME_MISSING)
+                return true;
+        for (size_t i = 0; i < j->plan.n_map; i++)
+                if (map_entry_matches(&j->plan.map[i], &o->id))
+                        return j->plan.map[i].revision_known;
+        return true;
+}
+
 /* Brings the Device object of one outcome up to date. */
 static void autoassign_publish_one(lssd_bus *b, const lssd_job *j, const lss_outcome *o, uint64_t now_realtime) {
         bool missing = o->kind == LSS_OUTCOME_MISSING;
@@ -630,7 +641,7 @@ static void autoassign_publish_one(lssd_bus *b, const lssd_job *j, const lss_out
 
         if (missing && autoassign_mark_missing(b, j, o))
                 return;
-        int k = lssd_bus_get_device(b, &o->id, node_id, &d);
+        int k = lssd_bus_get_device_full(b, &o->id, outcome_revision_known(j, o), node_id, &d);
         if (k < 0) {
                 log_error("%s: failed to record device %s: %s", b->ifname,
                           lssd_identity_format(&o->id, ident, sizeof(ident)), strerror(-k));

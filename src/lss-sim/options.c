@@ -3,6 +3,7 @@
 #include <getopt.h>
 #include <net/if.h>
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -98,8 +99,9 @@ int sim_parse_node_id(const char *s, uint8_t *ret) {
 }
 
 int sim_parse_slave(const char *s, sim_slave_spec *ret, const char **what) {
-        /* each a whole phrase: printed as "--slave 'X': <what>" */
-        static const char *const names[] = { "bad vendor", "bad product", "bad revision", "bad serial" };
+        /* each a whole phrase, what was expected and what came: printed as "--slave 'X': <what>" */
+        static const char *const names[] = { "vendor", "product", "revision", "serial" };
+        static char message[320];
         sim_slave_spec spec = {};
         char buf[128];
         char *fields[6] = {};
@@ -118,20 +120,32 @@ int sim_parse_slave(const char *s, sim_slave_spec *ret, const char **what) {
                 *colon = '\0';
         }
         if (n < 4 || n > 5) {
-                *what = "expected VENDOR:PRODUCT:REVISION:SERIAL[:NODEID]";
+                if (n > 5)
+                        *what = "expected VENDOR:PRODUCT:REVISION:SERIAL[:NODEID], got more than 5 fields";
+                else {
+                        snprintf(message, sizeof(message),
+                                 "expected VENDOR:PRODUCT:REVISION:SERIAL[:NODEID], got %zu field%s", n,
+                                 n == 1 ? "" : "s");
+                        *what = message;
+                }
                 return -EINVAL;
         }
         for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
                 uint32_t v;
                 if (sim_parse_u32(fields[i], &v) < 0) {
-                        *what = names[i];
+                        snprintf(message, sizeof(message),
+                                 "%s '%s': expected a number, decimal or 0x hexadecimal, 0..0xFFFFFFFF", names[i],
+                                 fields[i]);
+                        *what = message;
                         return -EINVAL;
                 }
                 lss_identity_set_field(&spec.id, i, v);
         }
         if (n == 5) {
                 if (sim_parse_node_id(fields[4], &spec.node_id) < 0) {
-                        *what = "bad node-ID (1..127, or 0xFF for non-configured)";
+                        snprintf(message, sizeof(message), "node-ID '%s': expected 1..127, or 0xFF for non-configured",
+                                 fields[4]);
+                        *what = message;
                         return -EINVAL;
                 }
                 spec.node_id_given = true;

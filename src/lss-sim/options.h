@@ -85,7 +85,8 @@ int sim_parse_u32(const char *s, uint32_t *ret);
 int sim_parse_ms(const char *s, uint32_t *ret_us);
 /* 1..127 or 0xFF */
 int sim_parse_node_id(const char *s, uint8_t *ret);
-/* VENDOR:PRODUCT:REVISION:SERIAL[:NODEID]; on failure *what names the bad part. */
+/* VENDOR:PRODUCT:REVISION:SERIAL[:NODEID]; on failure *what says what was expected
+ * and what came instead (a static buffer: valid until the next call). */
 int sim_parse_slave(const char *s, sim_slave_spec *ret, const char **what);
 /* KNOB[=VALUE][@SERIAL]; on failure *what says what is wrong. */
 int sim_parse_fault(const char *s, sim_fault_spec *ret, const char **what);

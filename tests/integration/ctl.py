@@ -36,8 +36,8 @@ EXIT = {
 # the bus and map of the D-Bus tests (run.py), so both check the same devices
 from run import CONFIG, SLAVES, VCAN1  # noqa: E402
 
-JSON_DEVICE_KEYS = ['bus', 'vendor', 'product', 'revision', 'serial', 'node_id', 'mapped_node_id', 'state',
-                    'last_seen', 'path']
+JSON_DEVICE_KEYS = ['bus', 'vendor', 'product', 'revision', 'serial', 'revision_known', 'node_id', 'mapped_node_id',
+                    'state', 'last_seen', 'path']
 JSON_BUS_KEYS = ['interface', 'state', 'bitrate', 'job', 'progress', 'queue_length', 'devices', 'device_states',
                  'last_pass']
 
@@ -522,6 +522,12 @@ def test_auto_assign_partial():
         r = ctl('auto-assign', '--quiet')
         expect_eq((r.rc, r.out), (EXIT['partial'], ''), 'auto-assign --quiet: nothing on stdout (%r)' % r.err)
         expect('device 0x0000009a:0x00000003:0x00000000:0x00000011 missing' in r.err, 'problems still said: %r' % r.err)
+        # never seen, and the map has no revision: list shows it unknown, not 0x00000000 (issue 21)
+        out = ctl.ok('list').out
+        expect(re.search(r'^vcan0 +0x0000009a +0x00000003 +- +0x00000011 +- +7 +missing', out, re.M),
+               'the missing device in list: %r' % out)
+        got = [(x['serial'], x['revision_known']) for x in ctl.ok('list', '--json').json]
+        expect((17, False) in got and all(k for s, k in got if s != 17), 'revision_known in list --json: %r' % got)
 
 
 def test_set_bitrate():
@@ -765,7 +771,8 @@ def test_unprivileged():
         expect_eq(len(ctl.ok('list', '--json', **nobody).json), 1, 'list as nobody')
         for args in (('scan',), ('assign', '0x1276', '5'), ('auto-assign',), ('set-bitrate', '250k'), ('reload',),
                      ('raw', 'inquire-node-id')):
-            r = ctl.fails('access-denied', "permission denied: this needs root or membership in group 'lssd'",
+            r = ctl.fails('access-denied', "permission denied: lssd allows this to root and group 'lssd' "
+                          "(usermod -aG lssd USER, then log in again)",
                           *args, **nobody)
             # the point, not dbus-daemon's ~300 characters of matched rule
             expect(len(r.err) < 160 and 'Rejected send message' not in r.err, 'a long refusal: %r' % r.err)

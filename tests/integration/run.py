@@ -406,10 +406,15 @@ def test_autoassign_pool():
         expect_eq(outcomes.get(17), ('missing', 0, 0, outcomes.get(17, ('',) * 4)[3]), 'outcome of the absent slave')
         expect_eq(result, 'partial', 'AutoAssign result with a mapped device missing')
         expect_eq(env.get(dev('vcan0', SLAVES[3]), DEVICE_IFACE, 'NodeId'), 100, 'NodeId from the pool')
+        # the journal's and AutoAssign's word for it, and lssctl list's too
+        expect_eq(env.get(dev('vcan0', SLAVES[3]), DEVICE_IFACE, 'State'), 'pool', 'State of a pool device')
         # never seen, and the map has no revision: the object has the map's identity
         absent = device_path('vcan0', 0x9A, 3, 0, 17)
         expect_eq(env.get(absent, DEVICE_IFACE, 'State'), 'missing', 'State of an absent slave')
         expect_eq(env.get(absent, DEVICE_IFACE, 'MappedNodeId'), 7, 'MappedNodeId of an absent slave')
+        # ... whose revision 0 means nothing: RevisionKnown says so (issue 21)
+        expect_eq(env.get(absent, DEVICE_IFACE, 'RevisionKnown'), False, 'RevisionKnown of an absent slave')
+        expect_eq(env.get(dev('vcan0', SLAVES[0]), DEVICE_IFACE, 'RevisionKnown'), True, 'RevisionKnown of a found one')
         expect_eq(env.get(dev('vcan0', SLAVES[0]), DEVICE_IFACE, 'State'), 'assigned', 'State after the pass')
         env.alive()
 
@@ -947,6 +952,33 @@ def test_bus_down():
 
 
 
+def test_no_interface():
+    """An interface that is not there says why in the journal, not only
+    'link gone': no such interface, or no CAN in this kernel at all (issue 21).
+    The real SocketCAN lssd on either backend: it needs no CAN to say so."""
+    import socket
+    ifname = 'lssdnone0'
+    try:
+        socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW).close()
+        has_can = True
+    except (OSError, AttributeError):
+        has_can = False
+    if os.path.exists('/sys/class/net/' + ifname):
+        raise Skip('%s exists here' % ifname)
+    with Env({ifname: []}, absent={ifname}, start_lssd=False) as env:
+        env.real = True  # no --simulate: the SocketCAN path is the point
+        env._start_lssd()
+        path = bus_path(ifname)
+        expect_eq(env.get(path, BUS_IFACE, 'State'), 'down', 'State of a bus without its interface')
+        out = env.lssd_output()
+        if has_can:
+            want = '%s: serving (SocketCAN, link gone): no interface %s (yet)' % (ifname, ifname)
+        else:
+            want = '%s: serving (SocketCAN, link gone): this kernel has no CAN support' % ifname
+        expect(want in out, 'why the link is gone (%s): %r' % ('CAN kernel' if has_can else 'no CAN', out))
+        env.alive()
+
+
 def test_check_config():
     """lssd --check-config as lssd(8) says: FILE as a word or with '=', the
     map it read shown line by line, an extra word named, no file at all an
@@ -1096,6 +1128,7 @@ TESTS = {
     'startup-order': test_startup_order,
     'reload': test_reload,
     'bus-down': test_bus_down,
+    'no-interface': test_no_interface,
 }
 
 if __name__ == '__main__':
