@@ -52,12 +52,16 @@ uint32_t lss_timing_limit(const lss_timing *t) {
         return t->patience_us > t->cfg.timeout_us ? t->patience_us : t->cfg.timeout_us;
 }
 
-static uint32_t wait_up_to(const lss_timing *t, bool discovery, uint32_t limit) {
+/* `patience`: whether the patience counts (the late guard leaves it out) */
+static uint32_t wait_up_to(const lss_timing *t, bool discovery, bool patience) {
+        uint32_t limit = patience ? lss_timing_limit(t) : t->cfg.timeout_us;
         if (!t->cfg.adaptive || discovery || t->n_samples == 0)
                 return limit;
         uint64_t w = (uint64_t) lss_timing_max(t) * t->cfg.factor_pct / 100;
         if (w < t->cfg.floor_us)
                 w = t->cfg.floor_us;
+        if (patience && w < t->patience_us)
+                w = t->patience_us;
         /* the limit caps it: a stray frame taken for a very late answer must
          * not make every later wait longer and longer */
         if (w > limit)
@@ -66,36 +70,34 @@ static uint32_t wait_up_to(const lss_timing *t, bool discovery, uint32_t limit) 
 }
 
 uint32_t lss_timing_wait(const lss_timing *t, bool discovery) {
-        return wait_up_to(t, discovery, lss_timing_limit(t));
+        return wait_up_to(t, discovery, true);
 }
 
+/* Each late answer lengthens the waits, and the next late answer comes
+ * after the longer wait: without a cap, answers that are not what they seem
+ * (a frame of another master, a fault) would grow them step by step. */
 static void set_patience(lss_timing *t, uint64_t p) {
-        if (p > LSS_PATIENCE_MAX_US)
-                p = LSS_PATIENCE_MAX_US;
-        t->patience_us = p > t->cfg.timeout_us ? (uint32_t) p : 0;
-}
-
-/* Each late answer lengthens the limit, and the next late answer comes after
- * the longer limit: without a cap, answers that are not what they seem (a
- * frame of another master, a fault) would grow it step by step. */
-static uint64_t patience_cap(const lss_timing *t) {
-        return (uint64_t) LSS_PATIENCE_FACTOR * t->cfg.timeout_us;
+        uint64_t cap = (uint64_t) LSS_PATIENCE_FACTOR * t->cfg.timeout_us;
+        if (cap > LSS_PATIENCE_MAX_US)
+                cap = LSS_PATIENCE_MAX_US;
+        t->patience_us = (uint32_t) (p < cap ? p : cap);
 }
 
 void lss_timing_on_answer(lss_timing *t, uint32_t latency_us, bool late) {
         if (late) {
                 uint64_t p = (uint64_t) latency_us * 3 / 2;
-                if (p > patience_cap(t))
-                        p = patience_cap(t);
                 if (p > t->patience_us)
                         set_patience(t, p);
-        } else if (latency_us <= t->cfg.timeout_us)
-                set_patience(t, t->patience_us - t->patience_us / 4);
+        } else if (t->patience_us && (uint64_t) latency_us * 2 <= t->patience_us) {
+                /* well within: wait a little less, down to what the latency asks */
+                uint32_t p = t->patience_us - t->patience_us / 16;
+                t->patience_us = p > t->cfg.floor_us ? p : 0;
+        }
 }
 
 void lss_timing_on_stray(lss_timing *t) {
-        uint64_t p = 2ull * lss_timing_limit(t);
-        set_patience(t, p < patience_cap(t) ? p : patience_cap(t));
+        uint32_t w = wait_up_to(t, false, true);
+        set_patience(t, 2ull * (w > t->patience_us ? w : t->patience_us));
 }
 
 /* Worst-case time of an 8-byte standard frame: 135 bits with stuffing. */
@@ -111,7 +113,7 @@ uint32_t lss_timing_answer_guard(const lss_timing *t) {
 
 uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery) {
         /* patience lengthens the wait, not this */
-        uint32_t g = wait_up_to(t, discovery, t->cfg.timeout_us) / 4;
+        uint32_t g = wait_up_to(t, discovery, false) / 4;
         return g > t->cfg.guard_floor_us ? g : t->cfg.guard_floor_us;
 }
 

@@ -5,7 +5,7 @@
  *
  *   limit              max(timeout, patience): the longest no-answer wait
  *   wait (no answer)   fixed: limit;
- *                      adaptive: min(limit, max(floor, factor * max))
+ *                      adaptive: min(limit, max(floor, factor * max, patience))
  *                      (limit until the first answer was measured)
  *   answer guard       after the first answer: max(guard_floor, max - min)
  *                      + one answer frame (a second responder's answer
@@ -13,14 +13,13 @@
  *   late guard         after a wait ran out: max(guard_floor, wait / 4),
  *                      the wait taken without patience. An answer in it
  *                      still counts and raises `max`.
- *   patience           0 while answers come within timeout. A late answer
- *                      to a discovery step raises it to 1.5 x its latency
- *                      (the other steps' waits follow `max`); an LSS answer
- *                      no step could take (it came after its step had
- *                      ended) doubles the limit; answers within timeout
- *                      take a quarter off it each. At most
- *                      LSS_PATIENCE_FACTOR x timeout, never above
- *                      LSS_PATIENCE_MAX_US.
+ *   patience           what late answers showed the waits must be. A late
+ *                      answer to a discovery step raises it to 1.5 x its
+ *                      latency (the other steps' waits follow `max`); an LSS
+ *                      answer no step could take (it came after its step
+ *                      had ended) doubles the wait; an answer within half
+ *                      of it takes 1/16 off. At most LSS_PATIENCE_FACTOR x
+ *                      timeout, never above LSS_PATIENCE_MAX_US.
  *
  * Why this is safe is written down in docs/engine.md: a wrong wait costs a
  * retry, never a wrong identity or node-ID. */

@@ -535,9 +535,9 @@ START_TEST(identify_services) {
 }
 END_TEST
 
-/* Patience (lss_timing.h, docs/engine.md): a late answer makes the limit
- * 1.5 x its latency, an answer no step could take doubles it, both capped at
- * 4 x timeout; answers within the timeout bring it back to the timeout. */
+/* Patience (lss_timing.h, docs/engine.md): a late answer to a discovery step
+ * makes the waits 1.5 x its latency, an answer no step could take doubles
+ * the wait, both capped at 4 x timeout; answers well within bring it back. */
 START_TEST(patience_follows_late_answers) {
         lss_timing_config c;
         lss_timing_config_default(&c);
@@ -554,20 +554,33 @@ START_TEST(patience_follows_late_answers) {
         lss_timing_on_stray(&t);
         lss_timing_on_answer(&t, 500000, true);
         ck_assert_uint_eq(lss_timing_limit(&t), 80000);
-        /* an answer that is late but prompt for the limit changes nothing */
-        lss_timing_on_answer(&t, 30000, false);
+        /* an answer in the second half of the wait is no reason to shorten it */
+        lss_timing_on_answer(&t, 45000, false);
         ck_assert_uint_eq(lss_timing_limit(&t), 80000);
         unsigned n = 0;
-        while (lss_timing_limit(&t) > 20000 && n < 100) {
+        while (lss_timing_limit(&t) > 20000 && n < 1000) {
                 lss_timing_on_answer(&t, 1000, false);
                 n++;
         }
-        ck_assert_uint_eq(lss_timing_limit(&t), 20000);
-        ck_assert_uint_le(n, 5);
-        /* an answer late for a short adaptive wait but within the timeout
-         * is not a reason to wait longer than the timeout */
-        lss_timing_on_answer(&t, 9000, true);
-        ck_assert_uint_eq(lss_timing_limit(&t), 20000);
+        ck_assert_uint_le(n, 30);
+        /* and on down to what the answers ask (never below twice the latency) */
+        while (n < 1000) {
+                lss_timing_on_answer(&t, 1000, false);
+                n++;
+        }
+        ck_assert_uint_le(t.patience_us, 2000);
+
+        /* prompt answers (4 ms): the adaptive wait is 6 ms; an answer that
+         * came after its step ended (a latency spike) doubles the wait, not
+         * the first-contact limit */
+        lss_timing_add_sample(&t, 4000);
+        ck_assert_uint_eq(lss_timing_wait(&t, false), 6000);
+        lss_timing_on_stray(&t);
+        ck_assert_uint_eq(lss_timing_wait(&t, false), 12000);
+        ck_assert_uint_eq(lss_timing_wait(&t, true), 20000);
+        lss_timing_on_stray(&t);
+        ck_assert_uint_eq(lss_timing_wait(&t, false), 24000);
+        ck_assert_uint_eq(lss_timing_late_guard(&t, false), 1500);
 }
 END_TEST
 
