@@ -22,6 +22,7 @@ typedef struct found {
         uint32_t id[4];
         uint8_t old_id, new_id;   /* scan: new_id is the node-ID */
         char *outcome, *detail;   /* auto-assign */
+        bool revision_unknown;    /* a missing device from a map entry without revision */
 } found;
 
 typedef struct results {
@@ -129,12 +130,33 @@ static void print_outcome_summary(const results *res, bool dry_run) {
 static void print_problems(const results *res) {
         for (size_t i = 0; i < res->n; i++) {
                 const found *f = &res->v[i];
+                char revision[16] = "-";
                 if (!outcome_is_problem(f->outcome))
                         continue;
-                fprintf(stderr, "lssctl: %s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32
-                        " %s%s%s\n", f->ifname, f->id[0], f->id[1], f->id[2], f->id[3], f->outcome,
-                        f->detail[0] ? ": " : "", f->detail);
+                if (!f->revision_unknown)
+                        snprintf(revision, sizeof(revision), "0x%08" PRIx32, f->id[2]);
+                fprintf(stderr, "lssctl: %s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":%s:0x%08" PRIx32 " %s%s%s\n",
+                        f->ifname, f->id[0], f->id[1], revision, f->id[3], f->outcome, f->detail[0] ? ": " : "",
+                        f->detail);
         }
+}
+
+/* The reply gives a missing device the map's identity, whose revision is 0
+ * when the map has none: the Device object says so (RevisionKnown). */
+static void mark_unknown_revisions(ctl_context *c, results *res) {
+        bool any = false;
+        for (size_t i = 0; i < res->n; i++)
+                any |= strcmp(res->v[i].outcome, "missing") == 0;
+        ctl_objects o = { 0 };
+        if (!any || ctl_objects_load(c, &o) < 0)
+                return;
+        for (size_t i = 0; i < res->n; i++)
+                for (size_t k = 0; k < o.n_devices; k++)
+                        if (strcmp(res->v[i].outcome, "missing") == 0 &&
+                            strcmp(o.devices[k].ifname, res->v[i].ifname) == 0 &&
+                            memcmp(o.devices[k].id, res->v[i].id, sizeof(res->v[i].id)) == 0)
+                                res->v[i].revision_unknown = o.devices[k].revision_unknown;
+        ctl_objects_done(&o);
 }
 
 static void print_results(ctl_context *c, const results *res, bool assignments) {
@@ -152,6 +174,8 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                         ctl_json_string(&j, res->v[i].ifname);
                         ctl_json_identity(&j, res->v[i].id);
                         if (assignments) {
+                                ctl_json_key(&j, "revision_known");
+                                ctl_json_bool(&j, !res->v[i].revision_unknown);
                                 ctl_json_key(&j, "old_node_id");
                                 ctl_json_uint(&j, res->v[i].old_id);
                                 ctl_json_key(&j, "new_node_id");
@@ -181,7 +205,7 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                 const found *f = &res->v[i];
                 bool missing = assignments && strcmp(f->outcome, "missing") == 0;
                 ctl_table_add(t, NULL, "%s", f->ifname);
-                ctl_table_identity(t, f->id);
+                ctl_table_identity_full(t, f->id, !f->revision_unknown);
                 if (missing || (assignments && f->old_id == 0xFF))
                         ctl_table_add(t, NULL, "-");
                 else if (assignments)
@@ -282,6 +306,8 @@ static int scan_like(ctl_context *c, bool assign) {
                         goto finish;
                 }
         }
+        if (assign)
+                mark_unknown_revisions(c, &res);
         print_results(c, &res, assign);
         r = 0;
         if (res.partial) {

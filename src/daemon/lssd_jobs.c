@@ -686,11 +686,14 @@ static const char *outcome_name(const lss_outcome *o) {
         return lss_outcome_name(o->kind);
 }
 
-static void autoassign_log_one(lssd_bus *b, const lss_outcome *o) {
+static void autoassign_log_one(lssd_bus *b, const lssd_job *j, const lss_outcome *o) {
         char ident[40], detail[200];
         int priority = LOG_INFO;
 
-        lssd_identity_format(&o->id, ident, sizeof(ident));
+        if (outcome_revision_known(j, o))
+                lssd_identity_format(&o->id, ident, sizeof(ident));
+        else /* the map's identity without a revision: not 0 */
+                snprintf(ident, sizeof(ident), "%08x:%08x:-:%08x", o->id.vendor, o->id.product, o->id.serial);
         switch (o->kind) {
         case LSS_OUTCOME_ASSIGNED:
         case LSS_OUTCOME_POOL:
@@ -743,7 +746,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                         seen.dry = false;
                 }
                 autoassign_publish_one(b, j, &seen, now_realtime);
-                autoassign_log_one(b, &out[i]);
+                autoassign_log_one(b, j, &out[i]);
                 if ((unsigned) out[i].kind <= LSS_OUTCOME_FAILED)
                         count[out[i].kind]++;
         }

@@ -396,7 +396,7 @@ def test_auto_assign():
         got = ctl.ok('auto-assign', '--json').json
         expect_eq([x for x in got if x['outcome'] == 'assigned'],
                   [{'bus': 'vcan0', 'vendor': 0xEC, 'product': 0x1234, 'revision': 0x00010002,
-                    'serial': 0x1276, 'old_node_id': 255, 'new_node_id': 5, 'outcome': 'assigned', 'detail': ''}],
+                    'serial': 0x1276, 'revision_known': True, 'old_node_id': 255, 'new_node_id': 5, 'outcome': 'assigned', 'detail': ''}],
                   'auto-assign --json')
         expect_eq(sorted((x['serial'], x['outcome']) for x in got),
                   [(17, 'unchanged'), (0x1276, 'assigned'), (0x80002468, 'unchanged'), (0xFFFFFFFF, 'unknown')],
@@ -511,17 +511,22 @@ def test_auto_assign_partial():
         ctl = Ctl(env)
         r = ctl('auto-assign')
         expect_eq(r.rc, EXIT['partial'], 'exit status of a partial pass (%r)' % r.err)
-        expect(re.search(r'device 0x0000009a:0x00000003:0x00000000:0x00000011 missing', r.err),
+        # the map has no revision: unknown, not 0x00000000 (issue 21)
+        expect(re.search(r'device 0x0000009a:0x00000003:-:0x00000011 missing', r.err),
                'the missing device on stderr: %r' % r.err)
+        expect(re.search(r'^vcan0 +0x0000009a +0x00000003 +- +0x00000011 +- +- +missing', r.out, re.M),
+               'the missing device in the table: %r' % r.out)
         expect('does not match the map: 1 mapped device missing' in r.err, 'the verdict on stderr: %r' % r.err)
         expect_eq(r.out.strip().splitlines()[-1], '1 node-ID assigned, 1 unchanged, 1 missing.', 'the count')
+        expect('device 0000009a:00000003:-:00000011 missing' in env.lssd_output(), 'the journal line of the '
+               'missing device: %r' % [x for x in env.lssd_output().splitlines() if 'missing' in x])
         r = ctl('auto-assign', '--json')
         expect_eq(r.rc, EXIT['partial'], 'exit status of a partial pass with --json')
-        expect_eq([(x['serial'], x['outcome']) for x in json.loads(r.out) if x['outcome'] == 'missing'],
-                  [(17, 'missing')], '--json names the missing device')
+        expect_eq([(x['serial'], x['outcome'], x['revision_known']) for x in json.loads(r.out)
+                   if x['outcome'] == 'missing'], [(17, 'missing', False)], '--json names the missing device')
         r = ctl('auto-assign', '--quiet')
         expect_eq((r.rc, r.out), (EXIT['partial'], ''), 'auto-assign --quiet: nothing on stdout (%r)' % r.err)
-        expect('device 0x0000009a:0x00000003:0x00000000:0x00000011 missing' in r.err, 'problems still said: %r' % r.err)
+        expect('device 0x0000009a:0x00000003:-:0x00000011 missing' in r.err, 'problems still said: %r' % r.err)
         # never seen, and the map has no revision: list shows it unknown, not 0x00000000 (issue 21)
         out = ctl.ok('list').out
         expect(re.search(r'^vcan0 +0x0000009a +0x00000003 +- +0x00000011 +- +7 +missing', out, re.M),
