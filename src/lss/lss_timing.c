@@ -81,6 +81,7 @@ static void set_patience(lss_timing *t, uint64_t p) {
         if (cap > LSS_PATIENCE_MAX_US)
                 cap = LSS_PATIENCE_MAX_US;
         t->patience_us = (uint32_t) (p < cap ? p : cap);
+        t->calm = 0;
 }
 
 void lss_timing_on_answer(lss_timing *t, uint32_t latency_us, bool late) {
@@ -88,10 +89,11 @@ void lss_timing_on_answer(lss_timing *t, uint32_t latency_us, bool late) {
                 uint64_t p = (uint64_t) latency_us * 3 / 2;
                 if (p > t->patience_us)
                         set_patience(t, p);
-        } else if (t->patience_us && (uint64_t) latency_us * 2 <= t->patience_us) {
-                /* well within: wait a little less, down to what the latency asks */
-                uint32_t p = t->patience_us - t->patience_us / 16;
-                t->patience_us = p > t->cfg.floor_us ? p : 0;
+        } else if (t->patience_us && (uint64_t) latency_us * 2 <= t->patience_us && ++t->calm >= LSS_LATENCY_WINDOW) {
+                /* spikes come seldom: only a run of answers in time without
+                 * one says the slowness is over */
+                uint32_t p = t->patience_us / 2;
+                set_patience(t, p > t->cfg.floor_us ? p : 0);
         }
 }
 

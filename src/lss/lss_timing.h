@@ -17,9 +17,10 @@
  *                      answer to a discovery step raises it to 1.5 x its
  *                      latency (the other steps' waits follow `max`); an LSS
  *                      answer no step could take (it came after its step
- *                      had ended) doubles the wait; an answer within half
- *                      of it takes 1/16 off. At most LSS_PATIENCE_FACTOR x
- *                      timeout, never above LSS_PATIENCE_MAX_US.
+ *                      had ended) doubles the wait; after
+ *                      LSS_LATENCY_WINDOW answers in a row within half of
+ *                      it, it is halved. At most LSS_PATIENCE_FACTOR x timeout, never
+ *                      above LSS_PATIENCE_MAX_US.
  *
  * Why this is safe is written down in docs/engine.md: a wrong wait costs a
  * retry, never a wrong identity or node-ID. */
@@ -38,7 +39,8 @@ typedef struct lss_timing {
         lss_timing_config cfg;
         uint32_t samples[LSS_LATENCY_WINDOW];
         unsigned n_samples, next;
-        uint32_t patience_us; /* the longer limit late answers called for; 0: none */
+        uint32_t patience_us; /* the wait late answers called for; 0: none */
+        unsigned calm;        /* answers in time since the patience last changed */
 } lss_timing;
 
 void lss_timing_init(lss_timing *t, const lss_timing_config *cfg);

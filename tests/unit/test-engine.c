@@ -537,7 +537,8 @@ END_TEST
 
 /* Patience (lss_timing.h, docs/engine.md): a late answer to a discovery step
  * makes the waits 1.5 x its latency, an answer no step could take doubles
- * the wait, both capped at 4 x timeout; answers well within bring it back. */
+ * the wait, both capped at 4 x timeout; runs of answers in time bring it
+ * back. */
 START_TEST(patience_follows_late_answers) {
         lss_timing_config c;
         lss_timing_config_default(&c);
@@ -554,20 +555,22 @@ START_TEST(patience_follows_late_answers) {
         lss_timing_on_stray(&t);
         lss_timing_on_answer(&t, 500000, true);
         ck_assert_uint_eq(lss_timing_limit(&t), 80000);
-        /* an answer in the second half of the wait is no reason to shorten it */
-        lss_timing_on_answer(&t, 45000, false);
+        /* answers in the second half of the wait are no reason to shorten it */
+        for (unsigned i = 0; i < 100; i++)
+                lss_timing_on_answer(&t, 45000, false);
         ck_assert_uint_eq(lss_timing_limit(&t), 80000);
         unsigned n = 0;
         while (lss_timing_limit(&t) > 20000 && n < 1000) {
                 lss_timing_on_answer(&t, 1000, false);
                 n++;
         }
-        ck_assert_uint_le(n, 30);
-        /* and on down to what the answers ask (never below twice the latency) */
+        /* halved after every run of 32 answers in time: 80 -> 40 -> 20 ms */
+        ck_assert_uint_eq(n, 2 * LSS_LATENCY_WINDOW);
         while (n < 1000) {
                 lss_timing_on_answer(&t, 1000, false);
                 n++;
         }
+        /* down to what the answers ask: never below twice their latency */
         ck_assert_uint_le(t.patience_us, 2000);
 
         /* prompt answers (4 ms): the adaptive wait is 6 ms; an answer that
