@@ -137,6 +137,18 @@ def main():
                 r = (medians[(impl, mode, 32)] / 32) / (medians[(impl, mode, 8)] / 8)
                 targets.append(('lssd %s linear (%s): s/node N=32 within 1.2x of N=8' % (mode, impl), r <= 1.2,
                                 '%.2fx' % r))
+    # issue 22: seconds per node in the VM, and a blind Scan of 127
+    for mode, want in (('mapped', 0.030), ('vendor', 0.40), ('blind', 0.55)):
+        for n in (8, 32):
+            if ('vm', mode, n) in medians:
+                per = medians[('vm', mode, n)] / n
+                targets.append(('lssd %s (vm), N=%d: <= %.3f s/node' % (mode, n, want), per <= want,
+                                '%.3f s/node' % per))
+    for k in ('footprint-vcan',):
+        fp = res.get(k)
+        if fp and 'scan' in fp and 'failed' not in fp['scan']:
+            targets.append(('blind Scan of %d slaves (vm) <= 70 s' % fp['slaves'], fp['scan']['elapsed_s'] <= 70,
+                            '%.1f s' % fp['scan']['elapsed_s']))
     n_runs = sum(len(c['runs']) for c in allcases.values())
     try:
         with open(os.path.join(bl.results_dir(), 'failures.log')) as f:
