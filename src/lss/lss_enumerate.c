@@ -95,6 +95,9 @@ int proc_confirm_found(lss_master *m, lss_scan_state *s) {
 static int confirm_by_selection(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->cpc);
         s->selected = true;
+        /* twice: a slave that loses it stays in configuration with F, with no
+         * answer to tell, and would take F's temporary node-ID too */
+        SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         SELECT_RETRIED(m, &s->cpc, s->attempt, &s->found);
         s->confirm = !step_answered(m) ? CONFIRM_NOBODY : step_conflict(m) ? CONFIRM_UNCLEAR : CONFIRM_OK;
@@ -226,6 +229,9 @@ static int give_back(lss_master *m, lss_scan_state *s) {
                         break;
                 m->stats.retries++;
         }
+        /* a switch to waiting has no answer to ask again on: one lost by the
+         * last slave verified would leave it in configuration */
+        SEND(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         s->dropped = 0;
         for (s->i = 0; s->i < s->n_cand; s->i++) {
                 const lss_device *d = &s->cand[s->i];
@@ -256,9 +262,30 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
         s->selected = false;
         if (s->n_kept == 0)
                 PT_CALL(&s->hpc, proc_confirm_found(m, s));
-        if (s->n_kept > 0 || s->confirm == CONFIRM_UNCLEAR) {
+        if (s->confirm == CONFIRM_OTHER) {
+                /* Another identity answered. Two compliant slaves in
+                 * configuration do that when one went there on a confirmation
+                 * answered after its step ended and their answers interleave;
+                 * so does a slave that enters configuration on a Fastscan for
+                 * another identity. Answers were missed: wait longer, send
+                 * everybody back to waiting and ask for F by selection (if
+                 * nobody answers, F was made up). Only a slave that does it
+                 * again is named. */
+                if (s->n_other++ > 0 && lss_identity_equal(&s->other, &s->other_before)) {
+                        misbehaving(m, s, &s->other, "entered configuration state on a Fastscan for another "
+                                    "identity, twice");
+                        goto out;
+                }
+                s->other_before = s->other;
+                lss_timing_on_stray(&m->timing);
+                s->confirm = CONFIRM_UNCLEAR;
+        }
+        if (s->n_kept > 0 || s->confirm == CONFIRM_UNCLEAR || (s->confirm == CONFIRM_OK && !s->no_set_aside)) {
                 /* another slave in configuration too (one that went there
-                 * early, or kept): the selective switch singles F out */
+                 * early, or kept): the selective switch singles F out. Also
+                 * before F may be set aside: a second slave in configuration
+                 * whose answers to the inquiry came after their steps ended
+                 * would take the temporary node-ID with F, and keep it. */
                 s->cpc = 0;
                 PT_CALL(&s->hpc, confirm_by_selection(m, s));
         }
@@ -284,10 +311,6 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 s->again->node_id = s->node;
                 s->n_kept++;
                 goto reselect;
-        }
-        if (s->confirm == CONFIRM_OTHER) {
-                misbehaving(m, s, &s->other, "entered configuration state on a Fastscan for another identity");
-                goto out;
         }
         if (s->confirm == CONFIRM_NOBODY) {
                 /* nobody in configuration: the identity was made of answers
@@ -363,7 +386,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
         s->misbehaving = false;
         for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
                 s->n_cand = s->n_aside = s->n_kept = 0;
-                s->rounds = s->phantoms = s->failed_scans = 0;
+                s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
                 s->next_temp = LSS_NODE_ID_MAX;
                 memset(s->back_due, 0, sizeof(s->back_due));
                 s->prog_base0 = m->prog_base;
@@ -391,8 +414,22 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
                         m->prog_base = s->prog_base0;
                         m->prog_span = s->prog_span0;
-                        if (s->fs.none || m->cancelling)
+                        if (m->cancelling)
                                 break;
+                        if (s->fs.none) {
+                                if (s->looks++ >= m->timing.cfg.retries)
+                                        break;
+                                /* Silence may be a slave that lost the ping (a frame lost
+                                 * costs a retry, not a slave) or one whose fastscan
+                                 * confirmation was answered after its step ended, now in
+                                 * configuration, uncounted, taking no part: back to
+                                 * waiting, and ping again. */
+                                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                                s->rpc = 0;
+                                PT_CALL(&s->pc, reselect_kept(m, s));
+                                continue;
+                        }
+                        s->looks = 0;
                         if (!s->fs.found) {
                                 if (++s->failed_scans <= m->timing.cfg.retries)
                                         continue;

@@ -99,6 +99,9 @@ typedef struct lss_scan_state {
         bool misbehaving;       /* the pass ended on a slave that does not follow CiA 305 (result.id) */
         uint64_t deadline;
         lss_identity found, other, phantom;
+        lss_identity other_before;  /* the last slave that confirmed another identity than found */
+        unsigned n_other;           /* how often that happened in this pass */
+        unsigned looks;             /* silent fastscan pings in a row, each after a switch to waiting */
         enum lss_confirm confirm;
         uint8_t node, temp, next_temp;
         const bool *avoid;      /* 128 entries or NULL: node-IDs not to set anybody aside with */

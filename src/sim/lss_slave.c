@@ -59,6 +59,8 @@ static uint64_t tx_delay(lss_slave *s) {
         uint64_t d = s->faults.latency_us;
         if (s->faults.jitter_us > 0)
                 d += next_random(&s->rng) % ((uint64_t) s->faults.jitter_us + 1);
+        if (s->faults.spike_ppm > 0 && next_random(&s->rng) % 1000000 < s->faults.spike_ppm)
+                d += s->faults.spike_us;
         uint64_t at = s->now_us + d;
         if (at < s->tx_ready_us)
                 at = s->tx_ready_us;

@@ -49,6 +49,8 @@ typedef struct lss_slave_faults {
         bool configure_error_specific; /* configure node-ID -> 255/spec 0x42 */
         uint32_t late_found_us;   /* the first answer to the fastscan request that
                                    * completes its identity comes this much later */
+        uint32_t spike_ppm;       /* each answer is spike_us late with this probability */
+        uint32_t spike_us;        /* (per million): a host that stalls now and then */
         uint32_t rx_loss_ppm;     /* each received frame is lost with this probability
                                    * (per million): a receive FIFO overrun */
 } lss_slave_faults;

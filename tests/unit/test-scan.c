@@ -136,14 +136,15 @@ static const lss_result *scan_lossy(bool slow, size_t n, uint64_t seed, membus *
 }
 
 START_TEST(scans_keep_lossy_slaves) {
-        /* Not every seed: both scans still miss a slave now and then at this
-         * loss (docs/engine.md, "Still missed"; over seeds 300..699 about 7 %
-         * of enumerations and 22 % of slowscans, before and after slowscan
-         * verified each slave as it was found). These ten do not. */
-        static const uint64_t seeds[] = { 300, 301, 302, 304, 305, 306, 307, 308, 312, 313 };
-        for (size_t k = 0; k < sizeof(seeds) / sizeof(seeds[0]); k++)
-                for (int slow = 0; slow <= 1; slow++) {
-                        uint64_t seed = seeds[k];
+        /* Enumeration: every seed (over 300..699, 400 of 400 find all 8;
+         * before the last pings and the selection before setting aside
+         * about 7 % missed one). Slowscan still misses a slave now and then
+         * at this loss (docs/engine.md, "Still missed"; 22 % of seeds):
+         * only these ten. */
+        static const uint64_t slow_seeds[] = { 300, 301, 302, 304, 305, 306, 307, 308, 312, 313 };
+        for (size_t k = 0; k < 40; k++)
+                for (int slow = 0; slow <= (k < 10); slow++) {
+                        uint64_t seed = slow ? slow_seeds[k] : 300 + k;
                         membus *b;
                         lss_master *m;
                         found_log fl;
@@ -159,6 +160,40 @@ START_TEST(scans_keep_lossy_slaves) {
                         lss_master_free(m);
                         membus_free(b);
                 }
+}
+END_TEST
+
+/* A host that stalls now and then (8 ms on 2 % of the answers, far beyond
+ * the waits prompt answers allow). A slave whose answer to the last fastscan
+ * confirmation comes after its step ended goes into configuration
+ * uncounted, and a second one follows it there. Their answers to Inquire
+ * Identity then interleave as the stalls fall: a made-up identity of two
+ * compliant slaves is no slave that "entered configuration for another
+ * identity" (a blind Scan of 127 lss-sim slaves in the VM ended in that
+ * Conflict), the one found is singled out by selection before it is set
+ * aside (else both took its temporary node-ID, and one kept it), and the
+ * uncounted one is found by a last ping after a switch to waiting (else the
+ * pass ended OK without it). Before: 13 Conflicts, 16 passes one short of
+ * 12, over seeds 500..799. */
+START_TEST(stalls_name_nobody) {
+        for (uint64_t seed = 500; seed < 530; seed++) {
+                lss_slave_faults f = faults_latency(1000, 300);
+                f.spike_ppm = 20000;
+                f.spike_us = 8000;
+                membus *b = bus_random(12, seed, 0x9A, 3, &f);
+                lss_master *m = master_default();
+                ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+                const lss_result *r = run(m, b);
+                ck_assert_msg(r->status == LSS_OK, "seed %u: %s", (unsigned) seed, r->message);
+                ck_assert_msg(r->n_devices == 12, "seed %u: %zu found", (unsigned) seed, r->n_devices);
+                assert_devices_real(b, r);
+                lss_drive_idle(b, 100000);
+                ck_assert(all_waiting(b));
+                for (size_t i = 0; i < 12; i++)
+                        ck_assert_uint_eq(membus_slave(b, i)->st.active_node_id, LSS_NODE_ID_UNCONFIGURED);
+                lss_master_free(m);
+                membus_free(b);
+        }
 }
 END_TEST
 
@@ -341,6 +376,7 @@ int main(void) {
         tcase_add_test(tc, cancel_midway);
         tcase_add_test(tc, progress_reported);
         tcase_add_test(tc, found_announced_early);
+        tcase_add_test(tc, stalls_name_nobody);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
