@@ -229,9 +229,18 @@ static int give_back(lss_master *m, lss_scan_state *s) {
                         break;
                 m->stats.retries++;
         }
-        /* a switch to waiting has no answer to ask again on: one lost by the
-         * last slave verified would leave it in configuration */
-        SEND(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        /* A switch to waiting has no answer: one lost by the last slave
+         * verified would leave it in configuration. Whoever answers an
+         * inquiry (asked again while silent: a lost one costs a retry) is
+         * still there and is switched again. */
+        for (s->gb_try = 0;; s->gb_try++) {
+                REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                LSS_CS_INQUIRE_NODE_ID);
+                if (!step_answered(m) || s->gb_try >= m->timing.cfg.retries)
+                        break;
+                m->stats.retries++;
+                SEND(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        }
         s->dropped = 0;
         for (s->i = 0; s->i < s->n_cand; s->i++) {
                 const lss_device *d = &s->cand[s->i];
@@ -407,6 +416,11 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 break;
                         }
                         s->fs = (lss_fastscan_state) { .known = s->known };
+                        if (s->n_cand > 0) {
+                                /* vendor, product and revision of the last find: likely those of the next */
+                                s->fs.guess = s->cand[s->n_cand - 1].id;
+                                s->fs.n_guess = LSS_FIELD_COUNT - 1;
+                        }
                         /* this find's share of the 90 % before the give-back */
                         m->prog_base = s->prog_base0 + s->prog_span0 * 0.9 * finds_done(m, s->n_cand);
                         m->prog_span = s->prog_span0 * 0.9 * (finds_done(m, s->n_cand + 1) -

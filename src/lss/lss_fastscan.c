@@ -6,7 +6,9 @@
  * confirmed with bitcheck 0 before the next one is started. A field whose
  * confirmation fails is retried from a new ping, with the fields confirmed
  * so far confirmed directly; if such a field fails too, everything is scanned
- * again. Nothing is reported found unless all four confirmations succeeded;
+ * again. A guess (vendor, product, revision of the last find) is confirmed
+ * directly before a field is scanned; scanned when nobody confirms it.
+ * Nothing is reported found unless all four confirmations succeeded;
  * callers check the identity again by inquiry before configuring anything. */
 #include "lss/lss_internal.h"
 
@@ -21,6 +23,7 @@ static uint32_t known_prefix(const lss_fastscan_known *k, unsigned sub) {
 int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         PT_BEGIN(&s->pc);
         s->found = s->none = false;
+        s->guessing = s->n_guess > 0;
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {
                 step_lss(m, LSS_CS_IDENTIFY_SLAVE);
                 m->step.discovery = true;
@@ -38,6 +41,21 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                         break;
                 }
                 for (s->sub = 0; s->sub < LSS_FIELD_COUNT; s->sub++) {
+                        if (s->guessing && s->sub < s->n_guess && s->sub >= s->confirmed &&
+                            s->known.known_bits[s->sub] == 0) {
+                                /* Devices on one bus mostly share vendor, product
+                                 * and revision: the caller's guess (the last find)
+                                 * is confirmed directly, one step instead of 33;
+                                 * scanned only when nobody has it. */
+                                s->value[s->sub] = lss_identity_field(&s->guess, s->sub);
+                                STEP_REQUEST(m, &s->pc,
+                                             lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
+                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)),
+                                             LSS_CS_IDENTIFY_SLAVE);
+                                if (step_answered(m))
+                                        continue;
+                                s->guessing = false;
+                        }
                         for (s->field_try = 0;; s->field_try++) {
                                 if (s->sub < s->confirmed) {
                                         /* confirmed in an earlier attempt: confirm directly */

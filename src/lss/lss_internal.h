@@ -51,6 +51,9 @@ typedef struct lss_step {
 typedef struct lss_fastscan_state {
         int pc;
         lss_fastscan_known known;
+        lss_identity guess;        /* fields [0, n_guess): tried before they are scanned */
+        unsigned n_guess;
+        bool guessing;             /* every field so far was a guess that held */
         uint32_t value[LSS_FIELD_COUNT];
         unsigned sub, attempt, field_try, confirmed; /* fields [0, confirmed) confirmed earlier */
         int bit;
