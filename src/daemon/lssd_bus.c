@@ -37,7 +37,7 @@ uint64_t lssd_realtime_us(void) {
         return (uint64_t) ts.tv_sec * 1000000u + (uint64_t) ts.tv_nsec / 1000u;
 }
 
-lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
+static lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
         lssd_bus_config *d = malloc(sizeof(*d));
         if (!d)
                 return NULL;
@@ -54,7 +54,7 @@ lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
         return d;
 }
 
-lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c) {
+static lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c) {
         if (c) {
                 free(c->devices);
                 free(c);
@@ -129,7 +129,7 @@ static void bus_update_published(lssd_bus *b) {
         }
 }
 
-void lssd_bus_flush_changes(lssd_bus *b) {
+static void lssd_bus_flush_changes(lssd_bus *b) {
         char *names[7];
         size_t n = 0;
 
