@@ -13,17 +13,11 @@
 #include "lss/lss_master.h"
 #include "sim/lss_drive.h"
 #include "sim/membus.h"
+#include "sim/sim_random.h"
 
 #define BITRATE 125000u
 #define LATENCY_US 1000u
 #define JITTER_US 300u
-
-static uint64_t rnd(uint64_t *s) {
-        uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-}
 
 enum mode { BLIND, KNOWN_VP, FULL, SCAN };
 static const char *const mode_names[] = { "(a) blind fastscan", "(b) vendor+product known",
@@ -44,7 +38,7 @@ static int run_case(enum mode mode, size_t n, uint64_t seed, row *out) {
         f.jitter_us = JITTER_US;
         lss_identity *ids = calloc(n, sizeof(*ids));
         for (size_t i = 0; i < n_slaves; i++) {
-                ids[i] = (lss_identity) { 0xEC, 0x1234, (uint32_t) rnd(&seed), (uint32_t) rnd(&seed) };
+                ids[i] = (lss_identity) { 0xEC, 0x1234, (uint32_t) sim_random_next(&seed), (uint32_t) sim_random_next(&seed) };
                 membus_add_slave(b, &ids[i], LSS_NODE_ID_UNCONFIGURED, &f);
         }
         lss_master *m = lss_master_new(NULL);

@@ -8,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "util/time_util.h"
+
 /* The kernel sizes dump messages to the largest buffer we ever read with,
  * up to 32 KiB: with this size nothing is ever truncated. */
 #define NL_BUFFER_SIZE 32768u
@@ -40,9 +42,9 @@ static void count_cb(const rtnl_link *link, void *userdata) {
 static uint64_t mono_us(const can_sys *sys) {
         struct timespec ts;
 
-        if (sys->clock_gettime(sys->userdata, CLOCK_MONOTONIC, &ts) < 0 || ts.tv_sec < 0)
+        if (sys->clock_gettime(sys->userdata, CLOCK_MONOTONIC, &ts) < 0)
                 return 0;
-        return (uint64_t) ts.tv_sec * 1000000u + (uint64_t) ts.tv_nsec / 1000u;
+        return timespec_to_us(&ts);
 }
 
 static int nl_open(const can_sys *sys, unsigned groups) {
@@ -116,7 +118,7 @@ static int nl_transact(const can_sys *sys, int fd, void *buf, size_t len, rtnl_l
 
                         if (now >= deadline)
                                 return -ETIMEDOUT;
-                        r = sys->poll(sys->userdata, &pfd, 1, (int) ((deadline - now + 999) / 1000));
+                        r = sys->poll(sys->userdata, &pfd, 1, (int) us_to_ms_up(deadline - now));
                         if (r < 0 && r != -EINTR)
                                 return r;
                         continue;

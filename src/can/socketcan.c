@@ -9,6 +9,8 @@
 #include <string.h>
 #include <sys/time.h>
 
+#include "util/time_util.h"
+
 /* Reads that return nothing to the caller (error frames, junk) before recv()
  * yields with 0, so that a flood cannot starve the event loop. The fd stays
  * readable, so a level-triggered poll calls us again. */
@@ -186,9 +188,9 @@ static uint64_t clock_us(socketcan_port *p, clockid_t clock) {
 
         /* Cannot fail for these clocks; 0 is the safe answer ("long ago")
          * should it ever: frames then look stale, never fresh. */
-        if (p->sys->clock_gettime(p->sys->userdata, clock, &ts) < 0 || ts.tv_sec < 0)
+        if (p->sys->clock_gettime(p->sys->userdata, clock, &ts) < 0)
                 return 0;
-        return (uint64_t) ts.tv_sec * 1000000u + (uint64_t) ts.tv_nsec / 1000u;
+        return timespec_to_us(&ts);
 }
 
 uint64_t socketcan_port_now(socketcan_port *p) {
@@ -238,7 +240,7 @@ static uint64_t rx_time(socketcan_port *p, const struct timeval *tv) {
         int64_t t = (int64_t) mono;
 
         if (tv) {
-                int64_t stamp = (int64_t) tv->tv_sec * 1000000 + tv->tv_usec;
+                int64_t stamp = timeval_to_us(tv);
                 t = stamp - offset;
                 /* A realtime step between arrival and now would shift the frame;
                  * the sample from the last send/recv (< 1 s old) bounds it: take
@@ -512,7 +514,7 @@ static int wait_writable(socketcan_port *p, uint64_t deadline, bool pause) {
                 r = p->sys->poll(p->sys->userdata, NULL, 0, 1);
                 return r == -EINTR ? 0 : r < 0 ? r : 0;
         }
-        r = p->sys->poll(p->sys->userdata, &pfd, 1, (int) ((deadline - now + 999) / 1000));
+        r = p->sys->poll(p->sys->userdata, &pfd, 1, (int) us_to_ms_up(deadline - now));
         if (r == -EINTR)
                 return 0;
         return r < 0 ? r : 0;

@@ -67,7 +67,7 @@ const lssd_bus_config *lssd_config_find_bus(const lssd_config *c, const char *if
         return NULL;
 }
 
-bool lssd_device_config_matches(const lssd_device_config *d, const lss_identity *id) {
+static bool lssd_device_config_matches(const lssd_device_config *d, const lss_identity *id) {
         return d->identity.vendor == id->vendor &&
                d->identity.product == id->product &&
                d->identity.serial == id->serial &&

@@ -15,7 +15,8 @@ void lssd_diag_clear(lssd_diag *d) {
         lssd_diag_init(d);
 }
 
-void lssd_diag_addv(lssd_diag *d, lssd_diag_severity severity, const char *format, va_list ap) {
+static __attribute__((format(printf, 3, 0))) void lssd_diag_addv(lssd_diag *d, lssd_diag_severity severity,
+                                                                 const char *format, va_list ap) {
         if (severity == LSSD_DIAG_ERROR)
                 d->n_errors++;
         else

@@ -42,8 +42,6 @@ void lssd_diag_clear(lssd_diag *d);
  * of memory the message is counted and d->oom is set. */
 void lssd_diag_add(lssd_diag *d, lssd_diag_severity severity, const char *format, ...)
         __attribute__((format(printf, 3, 4)));
-void lssd_diag_addv(lssd_diag *d, lssd_diag_severity severity, const char *format, va_list ap)
-        __attribute__((format(printf, 3, 0)));
 
 static inline bool lssd_diag_has_errors(const lssd_diag *d) {
         return d->n_errors > 0;

@@ -200,10 +200,6 @@ ctl_runner *ctl_runner_free(ctl_runner *run) {
         return NULL;
 }
 
-bool ctl_runner_interrupted(const ctl_runner *run) {
-        return run->interrupted;
-}
-
 int ctl_runner_call(ctl_runner *run, sd_bus_message *m, const char *bus_path, const char *ifname, const char *job,
                     sd_bus_message **ret_reply, sd_bus_error *error) {
         sd_bus_slot *match = NULL, *call = NULL;

@@ -25,5 +25,3 @@ ctl_runner *ctl_runner_free(ctl_runner *run);
  * (the running job was cancelled when it was this one). */
 int ctl_runner_call(ctl_runner *run, sd_bus_message *m, const char *bus_path, const char *ifname, const char *job,
                     sd_bus_message **ret_reply, sd_bus_error *error);
-/* ^C came (this call or an earlier one). */
-bool ctl_runner_interrupted(const ctl_runner *run);

@@ -13,6 +13,7 @@
 #include "ctl/ctl.h"
 #include "ctl/ctl_errors.h"
 #include "ctl/ctl_json.h"
+#include "util/time_util.h"
 
 typedef struct monitor {
         ctl_context *c;
@@ -212,12 +213,10 @@ static int on_signal_message(sd_bus_message *m, void *userdata, sd_bus_error *re
                 const char *what = *new_owner ? "started" : "stopped";
                 if (c->json) {
                         ctl_json j;
-                        struct timespec ts;
-                        clock_gettime(CLOCK_REALTIME, &ts);
                         ctl_json_init(&j, stdout);
                         ctl_json_object_begin(&j);
                         ctl_json_key(&j, "time");
-                        ctl_json_uint(&j, (uint64_t) ts.tv_sec * 1000000 + (uint64_t) ts.tv_nsec / 1000);
+                        ctl_json_uint(&j, clock_now_us(CLOCK_REALTIME));
                         ctl_json_key(&j, "signal");
                         ctl_json_string(&j, *new_owner ? "LssdStarted" : "LssdStopped");
                         ctl_json_object_end(&j);
@@ -247,12 +246,10 @@ static int on_signal_message(sd_bus_message *m, void *userdata, sd_bus_error *re
 
         if (c->json) {
                 ctl_json j;
-                struct timespec ts;
-                clock_gettime(CLOCK_REALTIME, &ts);
                 ctl_json_init(&j, stdout);
                 ctl_json_object_begin(&j);
                 ctl_json_key(&j, "time");
-                ctl_json_uint(&j, (uint64_t) ts.tv_sec * 1000000 + (uint64_t) ts.tv_nsec / 1000);
+                ctl_json_uint(&j, clock_now_us(CLOCK_REALTIME));
                 ctl_json_key(&j, "signal");
                 ctl_json_string(&j, member);
                 ctl_json_key(&j, "path");

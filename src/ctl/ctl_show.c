@@ -18,7 +18,7 @@ static const char *const device_states[] = {
 };
 #define N_DEVICE_STATES (sizeof(device_states) / sizeof(device_states[0]))
 
-const char *ctl_device_state_color(const char *state) {
+static const char *ctl_device_state_color(const char *state) {
         if (!state)
                 return NULL;
         if (strcmp(state, "assigned") == 0 || strcmp(state, "pool") == 0)
@@ -42,7 +42,7 @@ static const char *bus_state_color(const char *state) {
         return CTL_ANSI_RED;
 }
 
-void ctl_format_time(uint64_t usec, char *buf, size_t size) {
+static void ctl_format_time(uint64_t usec, char *buf, size_t size) {
         struct tm tm;
         time_t t = (time_t) (usec / 1000000);
 
@@ -234,10 +234,6 @@ void ctl_json_identity(ctl_json *j, const uint32_t id[4]) {
                 ctl_json_key(j, keys[i]);
                 ctl_json_uint(j, id[i]);
         }
-}
-
-void ctl_table_identity(ctl_table *t, const uint32_t id[4]) {
-        ctl_table_identity_full(t, id, true);
 }
 
 void ctl_table_identity_full(ctl_table *t, const uint32_t id[4], bool revision_known) {

@@ -17,6 +17,7 @@
 #include "daemon/lssd_ready.h"
 #include "daemon/lssd_vtables.h"
 #include "lss/lss_proto.h"
+#include "util/time_util.h"
 
 /* Frames read per wake-up before the other buses get their turn. */
 #define RX_BATCH 64u
@@ -32,12 +33,10 @@ uint64_t lssd_bus_now(lssd_bus *b) {
 }
 
 uint64_t lssd_realtime_us(void) {
-        struct timespec ts;
-        clock_gettime(CLOCK_REALTIME, &ts);
-        return (uint64_t) ts.tv_sec * 1000000u + (uint64_t) ts.tv_nsec / 1000u;
+        return clock_now_us(CLOCK_REALTIME);
 }
 
-lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
+static lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
         lssd_bus_config *d = malloc(sizeof(*d));
         if (!d)
                 return NULL;
@@ -54,7 +53,7 @@ lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
         return d;
 }
 
-lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c) {
+static lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c) {
         if (c) {
                 free(c->devices);
                 free(c);
@@ -129,7 +128,7 @@ static void bus_update_published(lssd_bus *b) {
         }
 }
 
-void lssd_bus_flush_changes(lssd_bus *b) {
+static void lssd_bus_flush_changes(lssd_bus *b) {
         char *names[7];
         size_t n = 0;
 
@@ -271,7 +270,7 @@ static void bus_job_end(lssd_bus *b) {
                 log_notice("%s: devices answered later than lss_timeout_ms = %u allows (%" PRIu64
                            " late, %" PRIu64 " after their step had ended): waited up to %u ms",
                            b->ifname, b->config->lss_timeout_ms, st->late_answers, st->stray_answers,
-                           (st->patience_us + 999) / 1000);
+                           (unsigned) us_to_ms_up(st->patience_us));
         b->job = NULL;
         b->changed |= LSSD_BUS_CHANGED_JOB;
         set_progress(b, 0);

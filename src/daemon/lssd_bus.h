@@ -155,12 +155,7 @@ void lssd_bus_refresh_devices(lssd_bus *b);
 /* A present device other than `except` answering to node_id, NULL if none. */
 lssd_device *lssd_bus_device_with_node_id(lssd_bus *b, uint8_t node_id, const lss_identity *except);
 
-/* A deep copy of a bus configuration; NULL when out of memory. */
-lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c);
-lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c);
 
 /* ---- for the job code ---- */
 uint64_t lssd_bus_now(lssd_bus *b);      /* the transport's clock (CLOCK_MONOTONIC µs) */
 uint64_t lssd_realtime_us(void);         /* CLOCK_REALTIME µs, for LastSeen */
-/* Emits PropertiesChanged for LSSD_BUS_CHANGED_* bits set. */
-void lssd_bus_flush_changes(lssd_bus *b);

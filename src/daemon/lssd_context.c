@@ -15,6 +15,8 @@
 #include "daemon/lssd_ready.h"
 #include "daemon/lssd_vtables.h"
 
+static void lssd_context_emit_buses_changed(lssd_context *ctx);
+
 void lssd_args_done(lssd_args *a) {
         free(a->config_path);
         for (size_t i = 0; i < a->n_buses; i++)
@@ -229,7 +231,7 @@ void lssd_context_bus_removed(lssd_context *ctx, lssd_bus *b) {
         lssd_ready_status(ctx, false);
 }
 
-void lssd_context_emit_buses_changed(lssd_context *ctx) {
+static void lssd_context_emit_buses_changed(lssd_context *ctx) {
         if (!ctx->bus || !ctx->manager_slot)
                 return;
         int r = sd_bus_emit_properties_changed(ctx->bus, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE, "Buses", NULL);

@@ -96,7 +96,6 @@ int lssd_context_request_name(lssd_context *ctx);
 lssd_bus *lssd_context_find_bus(lssd_context *ctx, const char *ifname);
 /* Called by a bus that was being removed and is idle now. */
 void lssd_context_bus_removed(lssd_context *ctx, lssd_bus *b);
-void lssd_context_emit_buses_changed(lssd_context *ctx);
 
 /* SIGTERM/SIGINT: stop taking jobs, cancel what is queued, finish or cancel
  * the running step, switch every slave back to waiting, release the name,

@@ -43,10 +43,6 @@ const char *lssd_raw_op_signature(lssd_raw_op op) {
         return (unsigned) op < _LSSD_RAW_OP_MAX ? raw_table[op].signature : NULL;
 }
 
-const char *lssd_raw_op_result_signature(lssd_raw_op op) {
-        return (unsigned) op < _LSSD_RAW_OP_MAX ? raw_table[op].result : NULL;
-}
-
 /* `argument` is the name of the Fastscan option argument: "known" for the
  * method, "steps[i]" for Execute. */
 static int read_args(sd_bus_message *m, lssd_raw_op op, const char *known_argument, lssd_raw_step *s,

@@ -51,8 +51,6 @@ const char *lssd_raw_op_to_string(lssd_raw_op op);
 int lssd_raw_op_from_string(const char *name);
 /* D-Bus signature of the method's arguments ("y", "uuuu", "", ...). */
 const char *lssd_raw_op_signature(lssd_raw_op op);
-/* D-Bus signature of the method's result ("", "b", "(uuuu)", "y"). */
-const char *lssd_raw_op_result_signature(lssd_raw_op op);
 
 /* Reads and checks the arguments of the raw method `op` from `m`. */
 int lssd_raw_step_read_args(sd_bus_message *m, lssd_raw_op op, lssd_raw_step *ret, sd_bus_error *error);

@@ -9,6 +9,7 @@
 
 #include "daemon/lssd_simbus.h"
 #include "sim/membus.h"
+#include "util/time_util.h"
 
 struct lssd_simbus {
         membus *bus;
@@ -16,9 +17,7 @@ struct lssd_simbus {
 };
 
 static uint64_t monotonic_us(void) {
-        struct timespec ts;
-        clock_gettime(CLOCK_MONOTONIC, &ts);
-        return (uint64_t) ts.tv_sec * 1000000u + (uint64_t) ts.tv_nsec / 1000u;
+        return clock_now_us(CLOCK_MONOTONIC);
 }
 
 /* Run the simulation up to the real present. */

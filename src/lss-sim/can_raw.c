@@ -8,42 +8,12 @@
 
 #include <linux/can/raw.h>
 
+#include "can/socketcan.h"
 #include "lss-sim/can_raw.h"
 
 #ifndef SO_RXQ_OVFL
 #define SO_RXQ_OVFL 40
 #endif
-
-bool can_raw_to_lss(const struct can_frame *cf, lss_frame *f) {
-        memset(f, 0, sizeof(*f));
-        if (cf->can_dlc > 8)
-                return false;
-        if (cf->can_id & CAN_ERR_FLAG) {
-                f->flags |= LSS_FRAME_ERR;
-                f->id = cf->can_id & CAN_ERR_MASK;
-        } else if (cf->can_id & CAN_EFF_FLAG) {
-                f->flags |= LSS_FRAME_EFF;
-                f->id = cf->can_id & CAN_EFF_MASK;
-        } else
-                f->id = cf->can_id & CAN_SFF_MASK;
-        if (cf->can_id & CAN_RTR_FLAG)
-                f->flags |= LSS_FRAME_RTR;
-        f->len = cf->can_dlc;
-        memcpy(f->data, cf->data, f->len);
-        return true;
-}
-
-void can_raw_from_lss(const lss_frame *f, struct can_frame *cf) {
-        memset(cf, 0, sizeof(*cf));
-        if (f->flags & LSS_FRAME_EFF)
-                cf->can_id = (f->id & CAN_EFF_MASK) | CAN_EFF_FLAG;
-        else
-                cf->can_id = f->id & CAN_SFF_MASK;
-        if (f->flags & LSS_FRAME_RTR)
-                cf->can_id |= CAN_RTR_FLAG;
-        cf->can_dlc = f->len <= 8 ? f->len : 8;
-        memcpy(cf->data, f->data, cf->can_dlc);
-}
 
 static int set_int(int fd, int level, int name, int value) {
         return setsockopt(fd, level, name, &value, sizeof(value)) < 0 ? -errno : 0;
@@ -127,7 +97,7 @@ int can_raw_recv(int fd, lss_frame *f, uint32_t *drops) {
         /* only classic frames are expected (CAN FD is not enabled) */
         if (n != (ssize_t) CAN_MTU || (msg.msg_flags & MSG_TRUNC))
                 return -EBADMSG;
-        if (!can_raw_to_lss(&cf, f))
+        if (socketcan_frame_from_can(&cf, f) < 0)
                 return -EBADMSG;
         return 1;
 }
@@ -135,8 +105,11 @@ int can_raw_recv(int fd, lss_frame *f, uint32_t *drops) {
 int can_raw_send(int fd, const lss_frame *f) {
         struct can_frame cf;
         ssize_t n;
+        int r;
 
-        can_raw_from_lss(f, &cf);
+        r = socketcan_frame_to_can(f, &cf);
+        if (r < 0)
+                return r;
         n = write(fd, &cf, CAN_MTU);
         if (n < 0)
                 return errno == EWOULDBLOCK ? -EAGAIN : -errno;

@@ -15,13 +15,10 @@
  * 0x7E5 and 0x000 only, no RTR, no error frames), own frames not received,
  * SO_RXQ_OVFL on. Returns the fd or -errno (-ENODEV: no such interface). */
 int can_raw_open(const char *ifname);
-/* 1: a frame; 0: nothing to read; -EBADMSG: a read of the wrong size (the
- * frame is skipped); other -errno (-ENETDOWN, -ENODEV ...). *drops gets the
+/* 1: a frame; 0: nothing to read; -EBADMSG: a read of the wrong size or a
+ * frame socketcan_frame_from_can() refuses (the frame is skipped); other -errno (-ENETDOWN, -ENODEV ...). *drops gets the
  * kernel's count of frames dropped for a full receive queue when known. */
 int can_raw_recv(int fd, lss_frame *f, uint32_t *drops);
-/* 0, or -ENOBUFS/-EAGAIN when the transmit queue is full, or -errno. */
+/* 0, or -ENOBUFS/-EAGAIN when the transmit queue is full, -EINVAL for a frame
+ * classic CAN cannot carry (socketcan_frame_to_can()), or -errno. */
 int can_raw_send(int fd, const lss_frame *f);
-
-/* Conversions, strict: false for a DLC above 8. */
-bool can_raw_to_lss(const struct can_frame *cf, lss_frame *f);
-void can_raw_from_lss(const lss_frame *f, struct can_frame *cf);

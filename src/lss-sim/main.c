@@ -16,6 +16,7 @@
 #include "lss-sim/can_raw.h"
 #include "lss-sim/options.h"
 #include "lss-sim/sim.h"
+#include "util/time_util.h"
 
 #define REOPEN_INTERVAL_US 1000000u
 #define RECV_BURST 256u
@@ -34,9 +35,7 @@ typedef struct context {
 } context;
 
 static uint64_t now_us(void) {
-        struct timespec ts;
-        clock_gettime(CLOCK_MONOTONIC, &ts);
-        return (uint64_t) ts.tv_sec * 1000000u + (uint64_t) ts.tv_nsec / 1000u;
+        return clock_now_us(CLOCK_MONOTONIC);
 }
 
 static void log_frame(const context *c, const char *dir, const lss_frame *f, uint64_t t) {
@@ -196,8 +195,7 @@ static int run_loop(context *c) {
                         t = now_us();
                         if (wake > t)
                                 d = wake - t;
-                        ts = (struct timespec) { .tv_sec = (time_t) (d / 1000000u),
-                                                 .tv_nsec = (long) (d % 1000000u) * 1000 };
+                        ts = us_to_timespec(d);
                         timeout = &ts;
                 }
                 /* built here: sending may have lost the socket, a reopen found it */

@@ -7,14 +7,7 @@
 
 #include "lss-sim/sim.h"
 #include "lss-sim/state_file.h"
-
-/* splitmix64: deterministic for a given --seed, which is all --random needs */
-static uint64_t mix(uint64_t *state) {
-        uint64_t z = (*state += UINT64_C(0x9E3779B97F4A7C15));
-        z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)) * UINT64_C(0x94D049BB133111EB);
-        return z ^ (z >> 31);
-}
+#include "sim/sim_random.h"
 
 /* A set of serial numbers (open addressing), to keep made-up serials distinct. */
 typedef struct serial_set {
@@ -172,11 +165,11 @@ int sim_new(sim **ret, const sim_options *o, uint64_t now_us, FILE *err) {
                                 fprintf(err, "lss-sim: warning: --slave %s: serial number used twice\n", ident);
                         }
                 } else {
-                        id.vendor = profile->fixed_vendor ? profile->vendor : (uint32_t) mix(&rng);
-                        id.product = profile->fixed_product ? profile->product : (uint32_t) mix(&rng);
-                        id.revision = (uint32_t) mix(&rng);
+                        id.vendor = profile->fixed_vendor ? profile->vendor : (uint32_t) sim_random_next(&rng);
+                        id.product = profile->fixed_product ? profile->product : (uint32_t) sim_random_next(&rng);
+                        id.revision = (uint32_t) sim_random_next(&rng);
                         do
-                                id.serial = (uint32_t) mix(&rng);
+                                id.serial = (uint32_t) sim_random_next(&rng);
                         while (!serial_set_add(&serials, id.serial));
                         node_id = profile->default_node_id;
                 }
@@ -193,7 +186,7 @@ int sim_new(sim **ret, const sim_options *o, uint64_t now_us, FILE *err) {
                 ss->sim = s;
                 ss->index = (uint32_t) i;
                 lss_slave_init(&ss->s, &id, node_id, (uint8_t) bit_index, &faults,
-                               o->seed ^ (UINT64_C(0x9E3779B97F4A7C15) * (i + 1)), on_emit, ss);
+                               sim_random_slave_seed(o->seed, i), on_emit, ss);
                 if (o->state_dir) {
                         r = restore_state(s, ss, err);
                         if (r < 0)

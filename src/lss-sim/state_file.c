@@ -18,7 +18,7 @@ static const char *const nmt_names[] = {
         [SLAVE_NMT_STOPPED] = "stopped",
 };
 
-const char *state_nmt_name(enum lss_slave_nmt nmt) {
+static const char *state_nmt_name(enum lss_slave_nmt nmt) {
         return (unsigned) nmt < sizeof(nmt_names) / sizeof(nmt_names[0]) ? nmt_names[nmt] : "unknown";
 }
 

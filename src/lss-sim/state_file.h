@@ -46,4 +46,3 @@ int state_file_read(const char *path, state_record *ret, unsigned *line);
 /* Whether the identity keys present in the file agree with `id`. */
 bool state_record_matches(const state_record *r, const lss_identity *id);
 
-const char *state_nmt_name(enum lss_slave_nmt nmt);

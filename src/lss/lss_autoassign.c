@@ -325,7 +325,7 @@ static uint32_t patient_wait(const lss_master *m, const lss_aa_state *s) {
         return (uint32_t) (w < PATIENT_MAX_US ? w : PATIENT_MAX_US);
 }
 
-int proc_autoassign(lss_master *m) {
+static int proc_autoassign(lss_master *m) {
         lss_aa_state *s = m->aa;
         PT_BEGIN(&s->pc);
         for (size_t i = 0; i < s->plan->n_map; i++)

@@ -246,10 +246,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s);
 /* enumerate.c: Inquire Identity of the slave in configuration against
  * s->found (s->confirm, s->other) */
 int proc_confirm_found(lss_master *m, lss_scan_state *s);
-/* scan.c: selective switch + Inquire Node-ID of the last candidate (slowscan) */
-int verify_candidate(lss_master *m, lss_scan_state *s);
 int cand_add(lss_scan_state *s, const lss_identity *id);
 int proc_slowscan(lss_master *m, lss_scan_state *s);
-int proc_autoassign(lss_master *m);
 void lss_autoassign_free_state(lss_master *m);
 int master_start_procedure(lss_master *m, lss_proc_fn proc, uint64_t now);

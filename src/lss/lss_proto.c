@@ -15,7 +15,7 @@ uint32_t lss_get_u32(const uint8_t *p) {
         return (uint32_t) p[0] | (uint32_t) p[1] << 8 | (uint32_t) p[2] << 16 | (uint32_t) p[3] << 24;
 }
 
-void lss_put_u16(uint8_t *p, uint16_t v) {
+static void lss_put_u16(uint8_t *p, uint16_t v) {
         p[0] = v & 0xFF;
         p[1] = v >> 8;
 }

@@ -91,7 +91,6 @@ void lss_frame_request(lss_frame *f, uint8_t cs);  /* 0x7E5, DLC 8, all zero but
 void lss_frame_response(lss_frame *f, uint8_t cs); /* 0x7E4, DLC 8 */
 void lss_put_u32(uint8_t *p, uint32_t v);
 uint32_t lss_get_u32(const uint8_t *p);
-void lss_put_u16(uint8_t *p, uint16_t v);
 uint16_t lss_get_u16(const uint8_t *p);
 
 void lss_encode_switch_global(lss_frame *f, enum lss_mode mode);

@@ -74,7 +74,7 @@ static lss_range_item parent_of(const lss_range_item *hi) {
 /* Selective switch to the candidate just found, read its node-ID, back to
  * waiting: verified, it is a result device and announced at once (the
  * bisection goes on from waiting state); else it is counted in `dropped`. */
-int verify_candidate(lss_master *m, lss_scan_state *s) {
+static int verify_candidate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->vpc);
         SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->n_cand - 1].id);
         if (!step_answered(m)) {

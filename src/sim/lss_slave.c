@@ -2,6 +2,7 @@
 /* The CiA 305 LSS slave model (plus the NMT commands it needs). Sans-I/O:
  * frames and time come in, answers go out through the emit callback. */
 #include "sim/lss_slave.h"
+#include "sim/sim_random.h"
 
 #include <string.h>
 
@@ -13,14 +14,6 @@ void lss_slave_faults_default(lss_slave_faults *f) {
         memset(f, 0, sizeof(*f));
         f->ignore_cs = -1;
         f->early_config = SLAVE_EARLY_NONE;
-}
-
-/* splitmix64: small, good enough, and deterministic for a given seed */
-static uint64_t next_random(uint64_t *state) {
-        uint64_t z = (*state += UINT64_C(0x9E3779B97F4A7C15));
-        z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)) * UINT64_C(0x94D049BB133111EB);
-        return z ^ (z >> 31);
 }
 
 void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8_t bit_index,
@@ -58,9 +51,13 @@ static bool state_equal(const lss_slave_state *a, const lss_slave_state *b) {
 static uint64_t tx_delay(lss_slave *s) {
         uint64_t d = s->faults.latency_us;
         if (s->faults.jitter_us > 0)
+<<<<<<< HEAD
                 d += next_random(&s->rng) % ((uint64_t) s->faults.jitter_us + 1);
         if (s->faults.spike_ppm > 0 && next_random(&s->rng) % 1000000 < s->faults.spike_ppm)
                 d += s->faults.spike_us;
+=======
+                d += sim_random_next(&s->rng) % ((uint64_t) s->faults.jitter_us + 1);
+>>>>>>> layers
         uint64_t at = s->now_us + d;
         if (at < s->tx_ready_us)
                 at = s->tx_ready_us;
@@ -452,7 +449,7 @@ void lss_slave_on_frame(lss_slave *s, const lss_frame *f, uint64_t now_us) {
 
         s->now_us = now_us;
         process_time(s);
-        bool lost = s->faults.rx_loss_ppm > 0 && next_random(&s->rng) % 1000000 < s->faults.rx_loss_ppm;
+        bool lost = s->faults.rx_loss_ppm > 0 && sim_random_next(&s->rng) % 1000000 < s->faults.rx_loss_ppm;
         /* inside the activation window the controller is being retuned */
         if (!lost && !in_window(s, now_us)) {
                 if (lss_is_request(f))

@@ -4,6 +4,7 @@
  * 1.25 µs a bit) add up exactly; the API speaks microseconds, rounding event
  * times up. */
 #include "sim/membus.h"
+#include "sim/sim_random.h"
 
 #include <errno.h>
 #include <stdlib.h>
@@ -210,10 +211,6 @@ static void slave_emit(void *userdata, const lss_frame *f, uint64_t delay_us) {
         queue_frame(n->bus, f, at < n->s.now_us ? NO_TIME : us_to_ns(at), SRC_SLAVE, n->index);
 }
 
-static uint64_t slave_seed(uint64_t seed, size_t index) {
-        return seed ^ (UINT64_C(0x9E3779B97F4A7C15) * ((uint64_t) index + 1));
-}
-
 size_t membus_add_slave(membus *b, const lss_identity *id, uint8_t node_id, const lss_slave_faults *faults) {
         if (grow((void **) &b->slaves, &b->cap_slaves, b->n_slaves + 1, sizeof(*b->slaves)) < 0)
                 return SIZE_MAX;
@@ -222,7 +219,7 @@ size_t membus_add_slave(membus *b, const lss_identity *id, uint8_t node_id, cons
                 return SIZE_MAX;
         n->bus = b;
         n->index = b->n_slaves;
-        lss_slave_init(&n->s, id, node_id, b->bus_index, faults, slave_seed(b->seed, n->index), slave_emit, n);
+        lss_slave_init(&n->s, id, node_id, b->bus_index, faults, sim_random_slave_seed(b->seed, n->index), slave_emit, n);
         /* power-on is the caller's choice, but the slave lives on bus time */
         n->s.now_us = n->s.tx_ready_us = b->now_ns / 1000;
         n->deadline_us = lss_slave_deadline(&n->s);

@@ -20,6 +20,7 @@
 #include "can/socketcan.h"
 #include "lss/lss_autoassign.h"
 #include "lss/lss_master.h"
+#include "util/time_util.h"
 
 static const lss_result *drive(lss_master *m, socketcan_port *p) {
         for (;;) {
@@ -44,7 +45,7 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
                 if (lss_master_done(m))
                         return lss_master_result(m);
                 uint64_t now = socketcan_port_now(p), dl = lss_master_deadline(m);
-                int timeout = dl == UINT64_MAX ? 1000 : dl <= now ? 0 : (int) ((dl - now + 999) / 1000);
+                int timeout = dl == UINT64_MAX ? 1000 : dl <= now ? 0 : (int) us_to_ms_up(dl - now);
                 struct pollfd pfd = { .fd = socketcan_port_fd(p), .events = POLLIN };
                 if (poll(&pfd, 1, timeout) < 0 && errno != EINTR)
                         return lss_master_result(m);

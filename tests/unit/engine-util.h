@@ -10,15 +10,9 @@
 #include "lss/lss_master.h"
 #include "sim/lss_drive.h"
 #include "sim/membus.h"
+#include "sim/sim_random.h"
 
 #define SECOND 1000000ull
-
-static inline uint64_t test_rand(uint64_t *s) {
-        uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-}
 
 /* n slaves with random, distinct identities; vendor/product fixed if nonzero. */
 static inline membus *bus_random(size_t n, uint64_t seed, uint32_t vendor, uint32_t product,
@@ -27,10 +21,10 @@ static inline membus *bus_random(size_t n, uint64_t seed, uint32_t vendor, uint3
         ck_assert_ptr_nonnull(b);
         for (size_t i = 0; i < n; i++) {
                 lss_identity id = {
-                        .vendor = vendor ? vendor : (uint32_t) test_rand(&seed),
-                        .product = product ? product : (uint32_t) test_rand(&seed),
-                        .revision = (uint32_t) test_rand(&seed),
-                        .serial = (uint32_t) test_rand(&seed),
+                        .vendor = vendor ? vendor : (uint32_t) sim_random_next(&seed),
+                        .product = product ? product : (uint32_t) sim_random_next(&seed),
+                        .revision = (uint32_t) sim_random_next(&seed),
+                        .serial = (uint32_t) sim_random_next(&seed),
                 };
                 membus_add_slave(b, &id, LSS_NODE_ID_UNCONFIGURED, faults);
         }

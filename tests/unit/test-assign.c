@@ -348,13 +348,13 @@ static void inject_late(void *ud, membus *bus, lss_master *m) {
         if (d == UINT64_MAX || d == li->last_deadline)
                 return;
         li->last_deadline = d;
-        if (test_rand(&li->rng) % 20 != 0)
+        if (sim_random_next(&li->rng) % 20 != 0)
                 return;
         lss_frame f;
-        lss_frame_response(&f, cs[test_rand(&li->rng) % sizeof(cs)]);
-        f.data[1] = (uint8_t) test_rand(&li->rng);
-        f.data[2] = (uint8_t) test_rand(&li->rng);
-        membus_inject(bus, &f, d + 1 + test_rand(&li->rng) % 1500);
+        lss_frame_response(&f, cs[sim_random_next(&li->rng) % sizeof(cs)]);
+        f.data[1] = (uint8_t) sim_random_next(&li->rng);
+        f.data[2] = (uint8_t) sim_random_next(&li->rng);
+        membus_inject(bus, &f, d + 1 + sim_random_next(&li->rng) % 1500);
         li->injected++;
 }
 

@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include "config/lssd_config.h"
+#include "sim/sim_random.h"
+#include "util/time_util.h"
 
 /* ---- helpers ---- */
 
@@ -863,27 +865,17 @@ START_TEST(nonexistent_file) {
 END_TEST
 
 static double now_s(void) {
-        struct timespec ts;
-        clock_gettime(CLOCK_MONOTONIC, &ts);
-        return (double) ts.tv_sec + (double) ts.tv_nsec / 1e9;
-}
-
-/* Deterministic junk: xorshift. */
-static uint32_t next_random(uint32_t *s) {
-        *s ^= *s << 13;
-        *s ^= *s >> 17;
-        *s ^= *s << 5;
-        return *s;
+        return (double) clock_now_us(CLOCK_MONOTONIC) / 1e6;
 }
 
 START_TEST(one_megabyte_of_junk) {
         const size_t size = 1024 * 1024;
         char *junk = malloc(size);
-        uint32_t seed = 0x2468ACE1u + (uint32_t) _i;
+        uint64_t seed = 0x2468ACE1u + (uint64_t) _i;
         ck_assert_ptr_nonnull(junk);
 
         for (size_t i = 0; i < size; i++) {
-                uint32_t r = next_random(&seed);
+                uint32_t r = (uint32_t) sim_random_next(&seed);
                 switch (_i) {
                 case 0: /* any byte */
                         junk[i] = (char) r;

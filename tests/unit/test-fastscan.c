@@ -273,11 +273,11 @@ static void inject_late(void *ud, membus *bus, lss_master *m) {
         if (d == UINT64_MAX || d == li->last_deadline)
                 return;
         li->last_deadline = d;
-        if (test_rand(&li->rng) % li->every != 0)
+        if (sim_random_next(&li->rng) % li->every != 0)
                 return;
         lss_frame f;
         lss_frame_response(&f, li->cs);
-        membus_inject(bus, &f, d + 1 + test_rand(&li->rng) % 1500);
+        membus_inject(bus, &f, d + 1 + sim_random_next(&li->rng) % 1500);
         li->injected++;
 }
 

@@ -589,42 +589,6 @@ START_TEST(txqueue_merge) {
 }
 END_TEST
 
-/* ---- CAN frame conversion ---- */
-
-START_TEST(can_conversion) {
-        struct can_frame cf = { .can_id = 0x7E5, .can_dlc = 8, .data = { 0x04, 0x01 } };
-        lss_frame f;
-
-        ck_assert(can_raw_to_lss(&cf, &f));
-        ck_assert(lss_is_request(&f));
-        ck_assert_uint_eq(f.data[1], 1);
-
-        cf.can_id = 0x7E5 | CAN_EFF_FLAG;
-        ck_assert(can_raw_to_lss(&cf, &f));
-        ck_assert_uint_eq(f.flags, LSS_FRAME_EFF);
-        ck_assert(!lss_is_request(&f));
-
-        cf.can_id = 0x7E5 | CAN_RTR_FLAG;
-        ck_assert(can_raw_to_lss(&cf, &f));
-        ck_assert_uint_eq(f.flags, LSS_FRAME_RTR);
-        ck_assert(!lss_is_request(&f));
-
-        cf.can_id = 0x7E5;
-        cf.can_dlc = 9;
-        ck_assert(!can_raw_to_lss(&cf, &f));
-
-        lss_frame b = frame("744#00");
-        can_raw_from_lss(&b, &cf);
-        ck_assert_uint_eq(cf.can_id, 0x744);
-        ck_assert_uint_eq(cf.can_dlc, 1);
-        ck_assert_uint_eq(cf.data[0], 0);
-        b.flags = LSS_FRAME_EFF;
-        b.id = 0x1ABCDEF;
-        can_raw_from_lss(&b, &cf);
-        ck_assert_uint_eq(cf.can_id, 0x1ABCDEF | CAN_EFF_FLAG);
-}
-END_TEST
-
 /* ---- the segment on virtual time ---- */
 
 /* The seed example, byte for byte: one non-configured generic slave. */
@@ -953,7 +917,6 @@ int main(void) {
         tcase_add_test(tc, state_round_trip);
         tcase_add_test(tc, state_parse);
         tcase_add_test(tc, txqueue_merge);
-        tcase_add_test(tc, can_conversion);
         tcase_add_test(tc, seed_example);
         tcase_add_test(tc, configured_slave_boots);
         tcase_add_test(tc, fastscan_ping_merges);

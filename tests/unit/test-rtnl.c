@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "can/rtnl_watch.h"
+#include "util/time_util.h"
 
 /* ---- collecting callback ---- */
 
@@ -776,8 +777,7 @@ static int nf_close(void *ud, int fd) {
 }
 
 static int nf_clock(void *ud, clockid_t clock, struct timespec *ts) {
-        ts->tv_sec = (time_t) (NF.mono_us / 1000000u);
-        ts->tv_nsec = (long) (NF.mono_us % 1000000u) * 1000;
+        *ts = us_to_timespec(NF.mono_us);
         return 0;
 }
 

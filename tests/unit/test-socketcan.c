@@ -16,6 +16,7 @@
 
 #include "can/socketcan.h"
 #include "can/transport.h"
+#include "util/time_util.h"
 
 /* ---- fake kernel ---- */
 
@@ -243,8 +244,7 @@ static int f_clock_gettime(void *ud, clockid_t clock, struct timespec *ts) {
         if (f->clock_ret < 0)
                 return f->clock_ret;
         ck_assert(clock == CLOCK_MONOTONIC || clock == CLOCK_REALTIME);
-        ts->tv_sec = (time_t) (us / 1000000u);
-        ts->tv_nsec = (long) (us % 1000000u) * 1000;
+        *ts = us_to_timespec(us);
         return 0;
 }
 
@@ -1141,10 +1141,6 @@ END_TEST
 
 /* ---- receive time ---- */
 
-static struct timeval tv_of(uint64_t us) {
-        return (struct timeval) { .tv_sec = (time_t) (us / 1000000u), .tv_usec = (suseconds_t) (us % 1000000u) };
-}
-
 START_TEST(rx_time_conversion) {
         socketcan_port *p;
         lss_frame f = lss_req();
@@ -1159,7 +1155,7 @@ START_TEST(rx_time_conversion) {
         /* arrived 10 ms before we read it */
         it = push_rx(CAN_MTU, 0x7E4, 8);
         it->has_tv = true;
-        it->tv = tv_of(F.real_us - 10000);
+        it->tv = us_to_timeval(F.real_us - 10000);
         ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
         ck_assert_uint_eq(t, F.mono_us - 10000);
         ck_assert_uint_eq(socketcan_port_now(p), F.mono_us);
@@ -1167,7 +1163,7 @@ START_TEST(rx_time_conversion) {
         /* a stamp after the read is impossible: clamp to the read time */
         it = push_rx(CAN_MTU, 0x7E4, 8);
         it->has_tv = true;
-        it->tv = tv_of(F.real_us + 5000);
+        it->tv = us_to_timeval(F.real_us + 5000);
         ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
         ck_assert_uint_eq(t, F.mono_us);
 
@@ -1181,7 +1177,7 @@ START_TEST(rx_time_conversion) {
         s = F.mono_us;
         it = push_rx(CAN_MTU, 0x7E4, 8);
         it->has_tv = true;
-        it->tv = tv_of(s + off - 2000);
+        it->tv = us_to_timeval(s + off - 2000);
         F.mono_us += 3000;
         F.real_us += 3000 - 1000000;
         ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
@@ -1197,7 +1193,7 @@ START_TEST(rx_time_conversion) {
         s = F.mono_us;
         it = push_rx(CAN_MTU, 0x7E4, 8);
         it->has_tv = true;
-        it->tv = tv_of(s + off + 500);
+        it->tv = us_to_timeval(s + off + 500);
         F.mono_us += 1000;
         F.real_us += 1000 + 1000000;
         ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
@@ -1209,7 +1205,7 @@ START_TEST(rx_time_conversion) {
         F.real_us += 5000000 + 3000; /* 3 ms of slew meanwhile */
         it = push_rx(CAN_MTU, 0x7E4, 8);
         it->has_tv = true;
-        it->tv = tv_of(F.real_us - 1000);
+        it->tv = us_to_timeval(F.real_us - 1000);
         ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
         ck_assert_uint_eq(t, F.mono_us - 1000);
 
