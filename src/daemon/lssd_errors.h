@@ -13,19 +13,10 @@
 /* Name -> errno, terminated by SD_BUS_ERROR_MAP_END. */
 extern const sd_bus_error_map lssd_error_map[];
 
-/* The confirmed services whose answers carry error codes. */
-typedef enum lssd_service {
-        LSSD_SERVICE_CONFIGURE_NODE_ID,
-        LSSD_SERVICE_CONFIGURE_BIT_TIMING,
-        LSSD_SERVICE_STORE,
-        _LSSD_SERVICE_MAX,
-} lssd_service;
-
-/* "Configure Node-ID", ...; NULL if out of range. */
-const char *lssd_service_to_string(lssd_service s);
 /* What the slave's error code means for this service ("node-ID out of
- * range", "reserved", "manufacturer-specific", ...). Never NULL. */
-const char *lssd_lss_error_meaning(lssd_service s, uint8_t err);
+ * range", "reserved", "manufacturer-specific", ...); only Configure Node-ID,
+ * Configure Bit Timing and Store Configuration answer with codes. Never NULL. */
+const char *lssd_lss_error_meaning(enum lss_service s, uint8_t err);
 
 /* D-Bus error name for an engine status; NULL for LSS_OK. */
 const char *lssd_status_to_error_name(enum lss_status s);
@@ -33,7 +24,9 @@ const char *lssd_status_to_error_name(enum lss_status s);
 const char *lssd_status_to_result(enum lss_status s);
 
 /* Fills `error` from a failed engine result. `service` says which service's
- * error codes a Rejected result carries (_LSSD_SERVICE_MAX when none).
+ * error codes a Rejected result carries (the engine's code,
+ * r->failed_service, or the raw service's; LSS_SERVICE_NONE: the engine's
+ * message as it is).
  * `prefix`, when not NULL, goes in front of the message (e.g. "Step 2
  * (ConfigureNodeId): "). Returns the negative errno of the error name. */
-int lssd_error_from_result(sd_bus_error *error, const lss_result *r, lssd_service service, const char *prefix);
+int lssd_error_from_result(sd_bus_error *error, const lss_result *r, enum lss_service service, const char *prefix);

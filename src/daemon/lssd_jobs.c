@@ -181,7 +181,7 @@ static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
         /* the final switch to waiting is done */
         if (!sd_bus_error_is_set(&j->error) && r->status != LSS_OK) {
-                lssd_error_from_result(&j->error, r, _LSSD_SERVICE_MAX,
+                lssd_error_from_result(&j->error, r, LSS_SERVICE_NONE,
                                        "Switching the slaves back to waiting failed: ");
                 j->result = lssd_status_to_result(r->status);
         }
@@ -224,12 +224,10 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
         if (r->status != LSS_OK) {
                 sd_bus_error e = SD_BUS_ERROR_NULL;
-                lssd_service service = strncmp(r->message, "Store", 5) == 0 ? LSSD_SERVICE_STORE
-                                                                              : LSSD_SERVICE_CONFIGURE_NODE_ID;
                 if (r->in_use)
                         lssd_taken_error(b, &e, j->node_id, &j->identity, NULL);
                 else
-                        lssd_error_from_result(&e, r, service, NULL);
+                        lssd_error_from_result(&e, r, r->failed_service, NULL);
                 lssd_log_device(LOG_WARNING, b->ifname, &j->identity, j->node_id,
                                 "%s: AssignNodeId %s -> node %u failed: %s", b->ifname, ident, j->node_id,
                                 e.message);
@@ -296,9 +294,7 @@ static int run_unassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         uint8_t old = r->node_id;
         if (r->status != LSS_OK) {
                 sd_bus_error e = SD_BUS_ERROR_NULL;
-                lssd_service service = strncmp(r->message, "Store", 5) == 0 ? LSSD_SERVICE_STORE
-                                                                              : LSSD_SERVICE_CONFIGURE_NODE_ID;
-                lssd_error_from_result(&e, r, service, NULL);
+                lssd_error_from_result(&e, r, r->failed_service, NULL);
                 lssd_log_device(LOG_WARNING, b->ifname, &j->identity, old, "%s: UnassignNodeId %s failed: %s",
                                 b->ifname, ident, e.message);
                 reply_error(j, &e);
@@ -557,7 +553,7 @@ static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 sd_bus_error e = SD_BUS_ERROR_NULL;
                 j->scan_incomplete = true;
                 scan_publish(b, j, lssd_realtime_us());
-                lssd_error_from_result(&e, r, _LSSD_SERVICE_MAX, "Scan: ");
+                lssd_error_from_result(&e, r, LSS_SERVICE_NONE, "Scan: ");
                 log_warning("%s: %s", b->ifname, e.message);
                 reply_error(j, &e);
                 sd_bus_error_free(&e);
@@ -790,7 +786,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (r->status != LSS_OK) {
                 /* the pass as a whole broke off (bus down, cancelled): what it did is published above */
                 sd_bus_error e = SD_BUS_ERROR_NULL;
-                lssd_error_from_result(&e, r, _LSSD_SERVICE_MAX, "AutoAssign: ");
+                lssd_error_from_result(&e, r, LSS_SERVICE_NONE, "AutoAssign: ");
                 log_warning("%s: %s (%s)", b->ifname, e.message, j->summary);
                 reply_error(j, &e);
                 sd_bus_error_free(&e);

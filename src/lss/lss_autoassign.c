@@ -159,6 +159,8 @@ static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool 
                          m->timing.cfg.timeout_us / 1000);
         /* the pass goes on: one device's trouble is its own outcome */
         m->result.status = LSS_OK;
+        m->result.failed_service = LSS_SERVICE_NONE;
+        m->result.reason = LSS_REASON_NONE;
         m->result.message[0] = 0;
         m->result.in_use = false;
 }
