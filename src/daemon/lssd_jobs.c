@@ -593,11 +593,6 @@ static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
 /* ---- AutoAssign: the engine's pass over the map ---- */
 
-static bool map_entry_matches(const lss_map_entry *e, const lss_identity *id) {
-        return e->id.vendor == id->vendor && e->id.product == id->product && e->id.serial == id->serial &&
-               (!e->revision_known || e->id.revision == id->revision);
-}
-
 /* A mapped device that is not there: the objects of it we know (any revision
  * when the map has none) are missing; only when we know none is one made from
  * the map's identity, so that the absence shows. */
@@ -605,10 +600,10 @@ static bool autoassign_mark_missing(lssd_bus *b, const lssd_job *j, const lss_ou
         bool marked = false;
         for (size_t i = 0; i < j->plan.n_map; i++) {
                 const lss_map_entry *e = &j->plan.map[i];
-                if (!map_entry_matches(e, &o->id))
+                if (!lss_map_entry_matches(e, &o->id))
                         continue;
                 for (lssd_device *d = b->devices; d; d = d->next)
-                        if (map_entry_matches(e, &d->id)) {
+                        if (lss_map_entry_matches(e, &d->id)) {
                                 d->missing = true;
                                 d->blocked = false;
                                 marked = true;
@@ -623,7 +618,7 @@ static bool outcome_revision_known(const lssd_job *j, const lss_outcome *o) {
         if (o->kind != LSS_OUTCOME_MISSING)
                 return true;
         for (size_t i = 0; i < j->plan.n_map; i++)
-                if (map_entry_matches(&j->plan.map[i], &o->id))
+                if (lss_map_entry_matches(&j->plan.map[i], &o->id))
                         return j->plan.map[i].revision_known;
         return true;
 }

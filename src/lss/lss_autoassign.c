@@ -94,13 +94,14 @@ static bool already_handled(const lss_aa_state *s, const lss_identity *id) {
         return false;
 }
 
+bool lss_map_entry_matches(const lss_map_entry *e, const lss_identity *id) {
+        return lss_identity_matches(&e->id, e->revision_known, id);
+}
+
 static int lookup(const lss_autoassign_plan *p, const lss_identity *id) {
-        for (size_t i = 0; i < p->n_map; i++) {
-                const lss_map_entry *e = &p->map[i];
-                if (e->id.vendor == id->vendor && e->id.product == id->product && e->id.serial == id->serial &&
-                    (!e->revision_known || e->id.revision == id->revision))
+        for (size_t i = 0; i < p->n_map; i++)
+                if (lss_map_entry_matches(&p->map[i], id))
                         return (int) i;
-        }
         return -1;
 }
 
