@@ -67,11 +67,8 @@ const lssd_bus_config *lssd_config_find_bus(const lssd_config *c, const char *if
         return NULL;
 }
 
-static bool lssd_device_config_matches(const lssd_device_config *d, const lss_identity *id) {
-        return d->identity.vendor == id->vendor &&
-               d->identity.product == id->product &&
-               d->identity.serial == id->serial &&
-               (!d->has_revision || d->identity.revision == id->revision);
+bool lssd_device_config_matches(const lssd_device_config *d, const lss_identity *id) {
+        return lss_identity_matches(&d->identity, d->has_revision, id);
 }
 
 const lssd_device_config *lssd_config_lookup_device(const lssd_bus_config *b, const lss_identity *id) {

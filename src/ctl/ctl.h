@@ -8,13 +8,7 @@
 #include <stdio.h>
 #include <systemd/sd-bus.h>
 
-#define CTL_SERVICE "org.lssd.LSS1"
-#define CTL_ROOT "/org/lssd/LSS1"
-#define CTL_MANAGER_PATH CTL_ROOT "/Manager"
-#define CTL_MANAGER_IFACE CTL_SERVICE ".Manager"
-#define CTL_BUS_IFACE CTL_SERVICE ".Bus"
-#define CTL_DEVICE_IFACE CTL_SERVICE ".Device"
-#define CTL_BUS_PREFIX CTL_ROOT "/buses/"
+#include "names/lssd_names.h"
 
 typedef struct ctl_context {
         /* command line */

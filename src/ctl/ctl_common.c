@@ -85,9 +85,9 @@ int ctl_path_parse(const char *path, char **ret_ifname, char **ret_device) {
 
         /* <prefix><escaped ifname>[/devices/<label>]; the label is plain
          * hex and underscores, not escaped */
-        if (strncmp(path, CTL_BUS_PREFIX, strlen(CTL_BUS_PREFIX)) != 0)
+        if (strncmp(path, LSSD_BUSES_PATH "/", strlen(LSSD_BUSES_PATH "/")) != 0)
                 return -EINVAL;
-        p = path + strlen(CTL_BUS_PREFIX);
+        p = path + strlen(LSSD_BUSES_PATH "/");
         slash = strchr(p, '/');
         if (slash && strncmp(slash, "/devices/", strlen("/devices/")) != 0)
                 return -EINVAL;
@@ -96,7 +96,7 @@ int ctl_path_parse(const char *path, char **ret_ifname, char **ret_device) {
         prefix = strndup(path, slash ? (size_t) (slash - path) : strlen(path));
         if (!prefix)
                 return -ENOMEM;
-        r = sd_bus_path_decode(prefix, CTL_ROOT "/buses", &ifname);
+        r = sd_bus_path_decode(prefix, LSSD_BUSES_PATH, &ifname);
         free(prefix);
         if (r < 0)
                 return r;
@@ -125,10 +125,10 @@ static int get_bus(ctl_context *c, const char *ifname, char **ret) {
         const char *path;
         int r;
 
-        r = sd_bus_call_method(c->bus, CTL_SERVICE, CTL_MANAGER_PATH, CTL_MANAGER_IFACE, "GetBus", &error, &reply,
+        r = sd_bus_call_method(c->bus, LSSD_BUS_NAME, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE, "GetBus", &error, &reply,
                                "s", ifname);
         if (r < 0) {
-                if (sd_bus_error_has_name(&error, "org.lssd.LSS1.Error.NotFound"))
+                if (sd_bus_error_has_name(&error, LSSD_ERROR_NOT_FOUND))
                         r = ctl_fail(c, CTL_EXIT_NOT_FOUND, r, "lssd does not serve interface '%s'.", ifname);
                 else if (sd_bus_error_has_name(&error, SD_BUS_ERROR_INVALID_ARGS))
                         r = ctl_usage(c, "Invalid interface name '%s'.", ifname);
@@ -167,7 +167,7 @@ int ctl_buses(ctl_context *c, char ***ret_paths, char ***ret_ifnames, size_t *re
                 }
                 n = 1;
         } else {
-                r = sd_bus_get_property_strv(c->bus, CTL_SERVICE, CTL_MANAGER_PATH, CTL_MANAGER_IFACE, "Buses",
+                r = sd_bus_get_property_strv(c->bus, LSSD_BUS_NAME, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE, "Buses",
                                              &error, &paths);
                 if (r < 0) {
                         r = ctl_bus_fail(c, &error, r, "Failed to read the list of buses");

@@ -5,28 +5,23 @@
 
 #include <systemd/sd-bus.h>
 
+#include "names/lssd_names.h"
+
+/* The exit status of each lssd error, CTL_EXIT_<SYMBOL> (5..14, 16, 18),
+ * comes from its row in names/lssd_names.h. */
+#define CTL_EXIT_ENTRY(sym, errno_, exit_status, sentence) CTL_EXIT_##sym = exit_status,
 enum {
         CTL_EXIT_SUCCESS = 0,
         CTL_EXIT_FAILURE = 1,          /* anything not listed below */
         CTL_EXIT_USAGE = 2,            /* bad command line, InvalidArgs */
         CTL_EXIT_NOT_RUNNING = 3,      /* lssd is not running */
         CTL_EXIT_ACCESS_DENIED = 4,    /* AccessDenied */
-        CTL_EXIT_NO_RESPONSE = 5,
-        CTL_EXIT_REJECTED = 6,
-        CTL_EXIT_BUSY = 7,
-        CTL_EXIT_BUS_DOWN = 8,
-        CTL_EXIT_BUS_OFF = 9,
-        CTL_EXIT_NOT_FOUND = 10,
-        CTL_EXIT_CONFLICT = 11,
-        CTL_EXIT_CANCELLED = 12,
-        CTL_EXIT_NOT_SUPPORTED = 13,
-        CTL_EXIT_LIMITS_EXCEEDED = 14,
+        LSSD_ERRORS(CTL_EXIT_ENTRY)
         CTL_EXIT_BAD_CONFIG = 15,      /* ReloadConfig: InvalidFileContent */
-        CTL_EXIT_PERMISSION_DENIED = 16, /* lssd's own PermissionDenied, not the caller's */
         CTL_EXIT_PARTIAL = 17,         /* auto-assign: a mapped device missing, in conflict or failed */
-        CTL_EXIT_NOT_HELD = 18,        /* a raw service without holding the bus */
         CTL_EXIT_INTERRUPTED = 130,    /* ^C: the job was cancelled */
 };
+#undef CTL_EXIT_ENTRY
 
 typedef struct ctl_error_info {
         const char *name;      /* D-Bus error name */

@@ -68,7 +68,7 @@ static int on_properties_changed(sd_bus_message *m, void *userdata, sd_bus_error
         int r;
 
         r = sd_bus_message_read(m, "s", &iface);
-        if (r < 0 || strcmp(iface, CTL_BUS_IFACE) != 0)
+        if (r < 0 || strcmp(iface, LSSD_BUS_IFACE) != 0)
                 return 0;
         r = sd_bus_message_enter_container(m, 'a', "{sv}");
         if (r < 0)
@@ -120,11 +120,11 @@ static int on_signal(sd_event_source *s, const struct signalfd_siginfo *si, void
                 return 0;
         }
 
-        r = sd_bus_get_property_string(run->c->bus, CTL_SERVICE, run->bus_path, CTL_BUS_IFACE, "Job", &error,
+        r = sd_bus_get_property_string(run->c->bus, LSSD_BUS_NAME, run->bus_path, LSSD_BUS_IFACE, "Job", &error,
                                        &running);
         if (r >= 0 && strcmp(running, run->job) == 0) {
                 sd_bus_error_free(&error);
-                r = sd_bus_call_method(run->c->bus, CTL_SERVICE, run->bus_path, CTL_BUS_IFACE, "Cancel", &error,
+                r = sd_bus_call_method(run->c->bus, LSSD_BUS_NAME, run->bus_path, LSSD_BUS_IFACE, "Cancel", &error,
                                        NULL, NULL);
                 if (r >= 0) {
                         run->cancel_sent = true;
@@ -216,7 +216,7 @@ int ctl_runner_call(ctl_runner *run, sd_bus_message *m, const char *bus_path, co
 
         if (run->progress) {
                 /* before the call, so that no change is missed */
-                r = sd_bus_match_signal(run->c->bus, &match, CTL_SERVICE, bus_path,
+                r = sd_bus_match_signal(run->c->bus, &match, LSSD_BUS_NAME, bus_path,
                                         "org.freedesktop.DBus.Properties", "PropertiesChanged",
                                         on_properties_changed, run);
                 if (r < 0)
@@ -225,7 +225,7 @@ int ctl_runner_call(ctl_runner *run, sd_bus_message *m, const char *bus_path, co
         if (run->progress) {
                 /* what runs already, so that a queued call says what it waits for */
                 char *now = NULL;
-                if (sd_bus_get_property_string(run->c->bus, CTL_SERVICE, bus_path, CTL_BUS_IFACE, "Job", NULL,
+                if (sd_bus_get_property_string(run->c->bus, LSSD_BUS_NAME, bus_path, LSSD_BUS_IFACE, "Job", NULL,
                                                &now) >= 0)
                         snprintf(run->running, sizeof(run->running), "%s", now);
                 free(now);

@@ -208,7 +208,7 @@ static int on_signal_message(sd_bus_message *m, void *userdata, sd_bus_error *re
         if (strcmp(member, "NameOwnerChanged") == 0) {
                 const char *name, *old_owner, *new_owner;
                 if (sd_bus_message_read(m, "sss", &name, &old_owner, &new_owner) < 0 ||
-                    strcmp(name, CTL_SERVICE) != 0)
+                    strcmp(name, LSSD_BUS_NAME) != 0)
                         return 0;
                 const char *what = *new_owner ? "started" : "stopped";
                 if (c->json) {
@@ -335,11 +335,11 @@ int verb_monitor(ctl_context *c) {
         if (r >= 0)
                 r = sd_bus_attach_event(c->bus, mon.event, SD_EVENT_PRIORITY_NORMAL);
         if (r >= 0)
-                r = sd_bus_add_match(c->bus, NULL, "type='signal',sender='" CTL_SERVICE "'", on_signal_message, &mon);
+                r = sd_bus_add_match(c->bus, NULL, "type='signal',sender='" LSSD_BUS_NAME "'", on_signal_message, &mon);
         if (r >= 0)
                 r = sd_bus_add_match(c->bus, NULL,
                                      "type='signal',sender='org.freedesktop.DBus',interface='org.freedesktop.DBus',"
-                                     "member='NameOwnerChanged',arg0='" CTL_SERVICE "'",
+                                     "member='NameOwnerChanged',arg0='" LSSD_BUS_NAME "'",
                                      on_signal_message, &mon);
         if (r < 0) {
                 r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to watch lssd's signals: %s", strerror(-r));

@@ -163,7 +163,7 @@ static int read_object(sd_bus_message *m, ctl_objects *o) {
                 r = sd_bus_message_read(m, "s", &iface);
                 if (r < 0)
                         return r;
-                if (strcmp(iface, CTL_BUS_IFACE) == 0) {
+                if (strcmp(iface, LSSD_BUS_IFACE) == 0) {
                         r = grow((void **) &o->buses, o->n_buses, sizeof(ctl_bus_info));
                         if (r < 0)
                                 return r;
@@ -172,7 +172,7 @@ static int read_object(sd_bus_message *m, ctl_objects *o) {
                         if (!b->path)
                                 return -ENOMEM;
                         r = read_props(m, bus_prop, b);
-                } else if (strcmp(iface, CTL_DEVICE_IFACE) == 0) {
+                } else if (strcmp(iface, LSSD_DEVICE_IFACE) == 0) {
                         r = grow((void **) &o->devices, o->n_devices, sizeof(ctl_device_info));
                         if (r < 0)
                                 return r;
@@ -226,8 +226,8 @@ int ctl_objects_load(ctl_context *c, ctl_objects *ret) {
         r = ctl_connect(c);
         if (r < 0)
                 return r;
-        r = sd_bus_call_method(c->bus, CTL_SERVICE, CTL_MANAGER_PATH, "org.freedesktop.DBus.Properties", "GetAll",
-                               &error, &reply, "s", CTL_MANAGER_IFACE);
+        r = sd_bus_call_method(c->bus, LSSD_BUS_NAME, LSSD_MANAGER_PATH, "org.freedesktop.DBus.Properties", "GetAll",
+                               &error, &reply, "s", LSSD_MANAGER_IFACE);
         if (r < 0) {
                 r = ctl_bus_fail(c, &error, r, "Failed to read lssd's properties");
                 goto finish;
@@ -237,14 +237,14 @@ int ctl_objects_load(ctl_context *c, ctl_objects *ret) {
                 goto parse_error;
         reply = sd_bus_message_unref(reply);
 
-        r = sd_bus_get_property_strv(c->bus, CTL_SERVICE, CTL_MANAGER_PATH, CTL_MANAGER_IFACE, "Buses", &error,
+        r = sd_bus_get_property_strv(c->bus, LSSD_BUS_NAME, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE, "Buses", &error,
                                      &order);
         if (r < 0) {
                 r = ctl_bus_fail(c, &error, r, "Failed to read the list of buses");
                 goto finish;
         }
 
-        r = sd_bus_call_method(c->bus, CTL_SERVICE, CTL_ROOT, "org.freedesktop.DBus.ObjectManager",
+        r = sd_bus_call_method(c->bus, LSSD_BUS_NAME, LSSD_ROOT_PATH, "org.freedesktop.DBus.ObjectManager",
                                "GetManagedObjects", &error, &reply, NULL);
         if (r < 0) {
                 r = ctl_bus_fail(c, &error, r, "Failed to list lssd's objects");

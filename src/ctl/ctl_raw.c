@@ -161,7 +161,7 @@ static int build(sd_bus *bus, const char *path, const step *st, sd_bus_message *
         sd_bus_message *m = NULL;
         int r;
 
-        r = sd_bus_message_new_method_call(bus, &m, CTL_SERVICE, path, CTL_BUS_IFACE, st->s->method);
+        r = sd_bus_message_new_method_call(bus, &m, LSSD_BUS_NAME, path, LSSD_BUS_IFACE, st->s->method);
         if (r < 0)
                 return r;
         switch (st->s->arg) {
@@ -270,7 +270,7 @@ static int show_result(ctl_context *c, ctl_json *j, const step *st, sd_bus_messa
 static int simple_call(ctl_context *c, ctl_runner *run, const char *path, const char *ifname, const char *method,
                        sd_bus_error *error) {
         sd_bus_message *m = NULL, *reply = NULL;
-        int r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, path, CTL_BUS_IFACE, method);
+        int r = sd_bus_message_new_method_call(c->bus, &m, LSSD_BUS_NAME, path, LSSD_BUS_IFACE, method);
         if (r < 0)
                 return r;
         r = ctl_runner_call(run, m, path, ifname, method, &reply, error);
@@ -355,7 +355,7 @@ finish:
         if (acquired) {
                 /* always, also after a failure or ^C: a fresh loop-free call */
                 sd_bus_error release_error = SD_BUS_ERROR_NULL;
-                int k = sd_bus_call_method(c->bus, CTL_SERVICE, path, CTL_BUS_IFACE, "Release", &release_error,
+                int k = sd_bus_call_method(c->bus, LSSD_BUS_NAME, path, LSSD_BUS_IFACE, "Release", &release_error,
                                            NULL, NULL);
                 if (k < 0 && r >= 0)
                         r = ctl_bus_fail(c, &release_error, k, "Failed to release the bus");

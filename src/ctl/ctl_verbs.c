@@ -257,7 +257,7 @@ static int scan_like(ctl_context *c, bool assign) {
         for (size_t i = 0; i < n; i++) {
                 sd_bus_message *m = NULL, *reply = NULL;
 
-                r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, paths[i], CTL_BUS_IFACE, method);
+                r = sd_bus_message_new_method_call(c->bus, &m, LSSD_BUS_NAME, paths[i], LSSD_BUS_IFACE, method);
                 if (r >= 0)
                         r = sd_bus_message_open_container(m, 'a', "{sv}");
                 if (r >= 0 && assign && c->no_store)
@@ -546,7 +546,7 @@ int verb_assign(ctl_context *c) {
         if (r < 0)
                 goto finish;
 
-        r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, path, CTL_BUS_IFACE, "AssignNodeId");
+        r = sd_bus_message_new_method_call(c->bus, &m, LSSD_BUS_NAME, path, LSSD_BUS_IFACE, "AssignNodeId");
         if (r >= 0)
                 r = sd_bus_message_append(m, "uuuuy", id[0], id[1], id[2], id[3], node_id);
         if (r >= 0)
@@ -615,7 +615,7 @@ int verb_unassign(ctl_context *c) {
         if (r < 0)
                 goto finish;
 
-        r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, path, CTL_BUS_IFACE, "UnassignNodeId");
+        r = sd_bus_message_new_method_call(c->bus, &m, LSSD_BUS_NAME, path, LSSD_BUS_IFACE, "UnassignNodeId");
         if (r >= 0)
                 r = sd_bus_message_append(m, "uuuu", id[0], id[1], id[2], id[3]);
         if (r >= 0)
@@ -689,7 +689,7 @@ int verb_set_bitrate(ctl_context *c) {
         r = ctl_pick_bus(c, &path, &ifname);
         if (r < 0)
                 return r;
-        r = sd_bus_message_new_method_call(c->bus, &m, CTL_SERVICE, path, CTL_BUS_IFACE, "SetBitrate");
+        r = sd_bus_message_new_method_call(c->bus, &m, LSSD_BUS_NAME, path, LSSD_BUS_IFACE, "SetBitrate");
         if (r >= 0)
                 r = sd_bus_message_append(m, "uq", bitrate,
                                           (uint16_t) (c->has_delay ? c->delay_ms : DEFAULT_SWITCH_DELAY_MS));
@@ -706,7 +706,7 @@ int verb_set_bitrate(ctl_context *c) {
                 goto finish;
         }
         uint32_t before = 0;
-        (void) sd_bus_get_property_trivial(c->bus, CTL_SERVICE, path, CTL_BUS_IFACE, "Bitrate", NULL, 'u', &before);
+        (void) sd_bus_get_property_trivial(c->bus, LSSD_BUS_NAME, path, LSSD_BUS_IFACE, "Bitrate", NULL, 'u', &before);
         ctl_runner *run = NULL;
         sd_bus_message *reply = NULL;
         r = ctl_runner_new(c, c->stderr_tty, &run);
@@ -733,7 +733,7 @@ int verb_reload(ctl_context *c) {
         r = ctl_connect(c);
         if (r < 0)
                 return r;
-        r = sd_bus_call_method(c->bus, CTL_SERVICE, CTL_MANAGER_PATH, CTL_MANAGER_IFACE, "ReloadConfig", &error,
+        r = sd_bus_call_method(c->bus, LSSD_BUS_NAME, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE, "ReloadConfig", &error,
                                NULL, NULL);
         if (r < 0)
                 r = ctl_bus_fail(c, &error, r, "Failed to reload the configuration");

@@ -18,7 +18,7 @@
 
 static void help(void) {
         printf("lssd [OPTIONS...]\n\n"
-               "CANopen LSS master daemon (CiA 305), serving org.lssd.LSS1 on the system bus.\n\n"
+               "CANopen LSS master daemon (CiA 305), serving " LSSD_BUS_NAME " on the system bus.\n\n"
                "  -h --help              Show this help\n"
                "     --version           Show the version\n"
                "  -c --config FILE       Configuration file (default: %s if it exists)\n"

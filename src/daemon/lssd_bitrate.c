@@ -160,9 +160,7 @@ static int collect_devices(lssd_bus *b, lssd_job *j, char *unaddressable, size_t
                         continue;
                 }
                 for (size_t k = 0; k < j->n_br_devices && !found; k++)
-                        found = j->br_devices[k].id.vendor == c->identity.vendor &&
-                                j->br_devices[k].id.product == c->identity.product &&
-                                j->br_devices[k].id.serial == c->identity.serial;
+                        found = lssd_device_config_matches(c, &j->br_devices[k].id);
                 if (!found && n + 40 < size)
                         n += (size_t) snprintf(unaddressable + n, size - n, "%s%08x:%08x:*:%08x", n ? ", " : "",
                                                c->identity.vendor, c->identity.product, c->identity.serial);

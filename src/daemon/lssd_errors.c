@@ -1,45 +1,30 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
-#include <errno.h>
 #include <stdio.h>
 
 #include "daemon/lssd_errors.h"
 
+#define LSSD_ERROR_MAP_ENTRY(sym, errno_, exit_status, sentence) SD_BUS_ERROR_MAP(LSSD_ERROR_##sym, errno_),
 const sd_bus_error_map lssd_error_map[] = {
-        SD_BUS_ERROR_MAP(LSSD_ERROR_NO_RESPONSE, ETIMEDOUT),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_REJECTED, EREMOTEIO),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_BUSY, EBUSY),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_BUS_DOWN, ENETDOWN),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_BUS_OFF, ENOLINK),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_NOT_FOUND, ENXIO),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_CONFLICT, EADDRINUSE),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_CANCELLED, ECANCELED),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_NOT_SUPPORTED, EOPNOTSUPP),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_LIMITS_EXCEEDED, ENOBUFS),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_PERMISSION_DENIED, EPERM),
-        SD_BUS_ERROR_MAP(LSSD_ERROR_NOT_HELD, ENOLCK),
+        LSSD_ERRORS(LSSD_ERROR_MAP_ENTRY)
         SD_BUS_ERROR_MAP_END
 };
 
-const char *lssd_service_to_string(lssd_service s) {
-        static const char *const names[_LSSD_SERVICE_MAX] = {
-                [LSSD_SERVICE_CONFIGURE_NODE_ID] = "Configure Node-ID",
-                [LSSD_SERVICE_CONFIGURE_BIT_TIMING] = "Configure Bit Timing",
-                [LSSD_SERVICE_STORE] = "Store Configuration",
-        };
-        return (unsigned) s < _LSSD_SERVICE_MAX ? names[s] : NULL;
+/* The confirmed services whose answers carry error codes. */
+static bool answers_with_error_code(enum lss_service s) {
+        return s == LSS_SERVICE_CONFIGURE_NODE_ID || s == LSS_SERVICE_CONFIGURE_BIT_TIMING || s == LSS_SERVICE_STORE;
 }
 
-const char *lssd_lss_error_meaning(lssd_service s, uint8_t err) {
+const char *lssd_lss_error_meaning(enum lss_service s, uint8_t err) {
         if (err == 0)
                 return "success";
         if (err == 255)
                 return "manufacturer-specific";
         switch (s) {
-        case LSSD_SERVICE_CONFIGURE_NODE_ID:
+        case LSS_SERVICE_CONFIGURE_NODE_ID:
                 return err == 1 ? "node-ID out of range" : "reserved";
-        case LSSD_SERVICE_CONFIGURE_BIT_TIMING:
+        case LSS_SERVICE_CONFIGURE_BIT_TIMING:
                 return err == 1 ? "bit rate not supported" : "reserved";
-        case LSSD_SERVICE_STORE:
+        case LSS_SERVICE_STORE:
                 return err == 1 ? "store not supported" : err == 2 ? "storage media access error" : "reserved";
         default:
                 return "reserved";
@@ -77,7 +62,7 @@ const char *lssd_status_to_result(enum lss_status s) {
         return status_table[s].result;
 }
 
-int lssd_error_from_result(sd_bus_error *error, const lss_result *r, lssd_service service, const char *prefix) {
+int lssd_error_from_result(sd_bus_error *error, const lss_result *r, enum lss_service service, const char *prefix) {
         const char *name = lssd_status_to_error_name(r->status);
 
         if (!name) /* not a failure: callers should not get here */
@@ -85,9 +70,9 @@ int lssd_error_from_result(sd_bus_error *error, const lss_result *r, lssd_servic
         if (!prefix)
                 prefix = "";
 
-        if (r->status == LSS_E_REJECTED && lssd_service_to_string(service))
+        if (r->status == LSS_E_REJECTED && answers_with_error_code(service))
                 return sd_bus_error_setf(error, name, "%s%s rejected by the slave: error %u (%s), spec %u", prefix,
-                                         lssd_service_to_string(service), r->err,
+                                         lss_service_name(service), r->err,
                                          lssd_lss_error_meaning(service, r->err), r->spec);
 
         if (r->message[0])

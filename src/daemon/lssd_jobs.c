@@ -181,7 +181,7 @@ static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
         /* the final switch to waiting is done */
         if (!sd_bus_error_is_set(&j->error) && r->status != LSS_OK) {
-                lssd_error_from_result(&j->error, r, _LSSD_SERVICE_MAX,
+                lssd_error_from_result(&j->error, r, LSS_SERVICE_NONE,
                                        "Switching the slaves back to waiting failed: ");
                 j->result = lssd_status_to_result(r->status);
         }
@@ -224,12 +224,10 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
         if (r->status != LSS_OK) {
                 sd_bus_error e = SD_BUS_ERROR_NULL;
-                lssd_service service = strncmp(r->message, "Store", 5) == 0 ? LSSD_SERVICE_STORE
-                                                                              : LSSD_SERVICE_CONFIGURE_NODE_ID;
                 if (r->in_use)
                         lssd_taken_error(b, &e, j->node_id, &j->identity, NULL);
                 else
-                        lssd_error_from_result(&e, r, service, NULL);
+                        lssd_error_from_result(&e, r, r->failed_service, NULL);
                 lssd_log_device(LOG_WARNING, b->ifname, &j->identity, j->node_id,
                                 "%s: AssignNodeId %s -> node %u failed: %s", b->ifname, ident, j->node_id,
                                 e.message);
@@ -296,9 +294,7 @@ static int run_unassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         uint8_t old = r->node_id;
         if (r->status != LSS_OK) {
                 sd_bus_error e = SD_BUS_ERROR_NULL;
-                lssd_service service = strncmp(r->message, "Store", 5) == 0 ? LSSD_SERVICE_STORE
-                                                                              : LSSD_SERVICE_CONFIGURE_NODE_ID;
-                lssd_error_from_result(&e, r, service, NULL);
+                lssd_error_from_result(&e, r, r->failed_service, NULL);
                 lssd_log_device(LOG_WARNING, b->ifname, &j->identity, old, "%s: UnassignNodeId %s failed: %s",
                                 b->ifname, ident, e.message);
                 reply_error(j, &e);
@@ -557,7 +553,7 @@ static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 sd_bus_error e = SD_BUS_ERROR_NULL;
                 j->scan_incomplete = true;
                 scan_publish(b, j, lssd_realtime_us());
-                lssd_error_from_result(&e, r, _LSSD_SERVICE_MAX, "Scan: ");
+                lssd_error_from_result(&e, r, LSS_SERVICE_NONE, "Scan: ");
                 log_warning("%s: %s", b->ifname, e.message);
                 reply_error(j, &e);
                 sd_bus_error_free(&e);
@@ -597,11 +593,6 @@ static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
 
 /* ---- AutoAssign: the engine's pass over the map ---- */
 
-static bool map_entry_matches(const lss_map_entry *e, const lss_identity *id) {
-        return e->id.vendor == id->vendor && e->id.product == id->product && e->id.serial == id->serial &&
-               (!e->revision_known || e->id.revision == id->revision);
-}
-
 /* A mapped device that is not there: the objects of it we know (any revision
  * when the map has none) are missing; only when we know none is one made from
  * the map's identity, so that the absence shows. */
@@ -609,10 +600,10 @@ static bool autoassign_mark_missing(lssd_bus *b, const lssd_job *j, const lss_ou
         bool marked = false;
         for (size_t i = 0; i < j->plan.n_map; i++) {
                 const lss_map_entry *e = &j->plan.map[i];
-                if (!map_entry_matches(e, &o->id))
+                if (!lss_map_entry_matches(e, &o->id))
                         continue;
                 for (lssd_device *d = b->devices; d; d = d->next)
-                        if (map_entry_matches(e, &d->id)) {
+                        if (lss_map_entry_matches(e, &d->id)) {
                                 d->missing = true;
                                 d->blocked = false;
                                 marked = true;
@@ -627,7 +618,7 @@ static bool outcome_revision_known(const lssd_job *j, const lss_outcome *o) {
         if (o->kind != LSS_OUTCOME_MISSING)
                 return true;
         for (size_t i = 0; i < j->plan.n_map; i++)
-                if (map_entry_matches(&j->plan.map[i], &o->id))
+                if (lss_map_entry_matches(&j->plan.map[i], &o->id))
                         return j->plan.map[i].revision_known;
         return true;
 }
@@ -790,7 +781,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (r->status != LSS_OK) {
                 /* the pass as a whole broke off (bus down, cancelled): what it did is published above */
                 sd_bus_error e = SD_BUS_ERROR_NULL;
-                lssd_error_from_result(&e, r, _LSSD_SERVICE_MAX, "AutoAssign: ");
+                lssd_error_from_result(&e, r, LSS_SERVICE_NONE, "AutoAssign: ");
                 log_warning("%s: %s (%s)", b->ifname, e.message, j->summary);
                 reply_error(j, &e);
                 sd_bus_error_free(&e);

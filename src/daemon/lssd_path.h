@@ -15,14 +15,7 @@
 #include <stdint.h>
 
 #include "lss/lss_proto.h"
-
-#define LSSD_BUS_NAME       "org.lssd.LSS1"
-#define LSSD_ROOT_PATH      "/org/lssd/LSS1"
-#define LSSD_MANAGER_PATH   LSSD_ROOT_PATH "/Manager"
-#define LSSD_BUSES_PATH     LSSD_ROOT_PATH "/buses"
-#define LSSD_MANAGER_IFACE  "org.lssd.LSS1.Manager"
-#define LSSD_BUS_IFACE      "org.lssd.LSS1.Bus"
-#define LSSD_DEVICE_IFACE   "org.lssd.LSS1.Device"
+#include "names/lssd_names.h"
 
 /* "/org/lssd/LSS1/buses/<escaped ifname>"; -ENOMEM. */
 int lssd_bus_path(const char *ifname, char **ret);

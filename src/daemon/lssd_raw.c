@@ -13,19 +13,19 @@ static const struct {
         const char *name;
         const char *signature;
         const char *result;
-        lssd_service service; /* whose error codes a rejection carries */
+        enum lss_service service; /* whose error codes a rejection carries */
 } raw_table[_LSSD_RAW_OP_MAX] = {
-        [LSSD_RAW_SWITCH_MODE_GLOBAL] = { "SwitchModeGlobal", "y", "", _LSSD_SERVICE_MAX },
-        [LSSD_RAW_SWITCH_MODE_SELECTIVE] = { "SwitchModeSelective", "uuuu", "b", _LSSD_SERVICE_MAX },
-        [LSSD_RAW_CONFIGURE_NODE_ID] = { "ConfigureNodeId", "y", "", LSSD_SERVICE_CONFIGURE_NODE_ID },
-        [LSSD_RAW_CONFIGURE_BIT_TIMING] = { "ConfigureBitTiming", "yy", "", LSSD_SERVICE_CONFIGURE_BIT_TIMING },
-        [LSSD_RAW_ACTIVATE_BIT_TIMING] = { "ActivateBitTiming", "q", "", _LSSD_SERVICE_MAX },
-        [LSSD_RAW_STORE_CONFIGURATION] = { "StoreConfiguration", "", "", LSSD_SERVICE_STORE },
-        [LSSD_RAW_INQUIRE_IDENTITY] = { "InquireIdentity", "", "(uuuu)", _LSSD_SERVICE_MAX },
-        [LSSD_RAW_INQUIRE_NODE_ID] = { "InquireNodeId", "", "y", _LSSD_SERVICE_MAX },
-        [LSSD_RAW_IDENTIFY_REMOTE_SLAVES] = { "IdentifyRemoteSlaves", "uuuuuu", "b", _LSSD_SERVICE_MAX },
-        [LSSD_RAW_IDENTIFY_NON_CONFIGURED] = { "IdentifyNonConfigured", "", "b", _LSSD_SERVICE_MAX },
-        [LSSD_RAW_FASTSCAN] = { "Fastscan", "a{sv}", "(uuuu)", _LSSD_SERVICE_MAX },
+        [LSSD_RAW_SWITCH_MODE_GLOBAL] = { "SwitchModeGlobal", "y", "", LSS_SERVICE_NONE },
+        [LSSD_RAW_SWITCH_MODE_SELECTIVE] = { "SwitchModeSelective", "uuuu", "b", LSS_SERVICE_NONE },
+        [LSSD_RAW_CONFIGURE_NODE_ID] = { "ConfigureNodeId", "y", "", LSS_SERVICE_CONFIGURE_NODE_ID },
+        [LSSD_RAW_CONFIGURE_BIT_TIMING] = { "ConfigureBitTiming", "yy", "", LSS_SERVICE_CONFIGURE_BIT_TIMING },
+        [LSSD_RAW_ACTIVATE_BIT_TIMING] = { "ActivateBitTiming", "q", "", LSS_SERVICE_NONE },
+        [LSSD_RAW_STORE_CONFIGURATION] = { "StoreConfiguration", "", "", LSS_SERVICE_STORE },
+        [LSSD_RAW_INQUIRE_IDENTITY] = { "InquireIdentity", "", "(uuuu)", LSS_SERVICE_NONE },
+        [LSSD_RAW_INQUIRE_NODE_ID] = { "InquireNodeId", "", "y", LSS_SERVICE_NONE },
+        [LSSD_RAW_IDENTIFY_REMOTE_SLAVES] = { "IdentifyRemoteSlaves", "uuuuuu", "b", LSS_SERVICE_NONE },
+        [LSSD_RAW_IDENTIFY_NON_CONFIGURED] = { "IdentifyNonConfigured", "", "b", LSS_SERVICE_NONE },
+        [LSSD_RAW_FASTSCAN] = { "Fastscan", "a{sv}", "(uuuu)", LSS_SERVICE_NONE },
 };
 
 const char *lssd_raw_op_to_string(lssd_raw_op op) {

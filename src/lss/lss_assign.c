@@ -11,11 +11,13 @@
 
 bool inquired_node_id_ok(lss_master *m) {
         if (!step_answered(m)) {
-                master_fail(m, LSS_E_NO_RESPONSE, "the selected slave did not answer Inquire Node-ID");
+                master_fail_at(m, LSS_E_NO_RESPONSE, LSS_SERVICE_INQUIRE, LSS_REASON_NO_ANSWER,
+                               "the selected slave did not answer Inquire Node-ID");
                 return false;
         }
         if (step_conflict(m)) {
-                master_fail(m, LSS_E_CONFLICT, "more than one slave in configuration state answered Inquire Node-ID");
+                master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_INQUIRE, LSS_REASON_SEVERAL_ANSWERS,
+                               "more than one slave in configuration state answered Inquire Node-ID");
                 return false;
         }
         m->result.node_id = m->step.answer.data[1];
@@ -24,18 +26,21 @@ bool inquired_node_id_ok(lss_master *m) {
 
 bool configure_answer_ok(lss_master *m, uint8_t node_id) {
         if (!step_answered(m)) {
-                master_fail(m, LSS_E_NO_RESPONSE, "no answer to Configure Node-ID %u", node_id);
+                master_fail_at(m, LSS_E_NO_RESPONSE, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_NO_ANSWER,
+                               "no answer to Configure Node-ID %u", node_id);
                 return false;
         }
         if (step_conflict(m)) {
-                master_fail(m, LSS_E_CONFLICT, "more than one slave answered Configure Node-ID");
+                master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_SEVERAL_ANSWERS,
+                               "more than one slave answered Configure Node-ID");
                 return false;
         }
         m->result.err = m->step.answer.data[1];
         m->result.spec = m->step.answer.data[2];
         if (m->result.err != 0) {
-                master_fail(m, LSS_E_REJECTED, "Configure Node-ID %u rejected by the slave: error %u, spec %u",
-                            node_id, m->result.err, m->result.spec);
+                master_fail_at(m, LSS_E_REJECTED, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_REFUSED,
+                               "Configure Node-ID %u rejected by the slave: error %u, spec %u", node_id, m->result.err,
+                               m->result.spec);
                 return false;
         }
         return true;
@@ -43,7 +48,8 @@ bool configure_answer_ok(lss_master *m, uint8_t node_id) {
 
 bool store_answer_ok(lss_master *m) {
         if (!step_answered(m)) {
-                master_fail(m, LSS_E_NO_RESPONSE, "no answer to Store Configuration");
+                master_fail_at(m, LSS_E_NO_RESPONSE, LSS_SERVICE_STORE, LSS_REASON_NO_ANSWER,
+                               "no answer to Store Configuration");
                 return false;
         }
         m->result.err = m->step.answer.data[1];
@@ -53,8 +59,9 @@ bool store_answer_ok(lss_master *m) {
                  * until its next power cycle: go on, say so */
                 m->result.not_stored = true;
         } else if (m->result.err != 0) {
-                master_fail(m, LSS_E_REJECTED, "Store Configuration rejected by the slave: %s (error %u, spec %u)",
-                            lss_store_error_name(m->result.err), m->result.err, m->result.spec);
+                master_fail_at(m, LSS_E_REJECTED, LSS_SERVICE_STORE, LSS_REASON_REFUSED,
+                               "Store Configuration rejected by the slave: %s (error %u, spec %u)",
+                               lss_store_error_name(m->result.err), m->result.err, m->result.spec);
                 return false;
         }
         return true;
@@ -85,7 +92,8 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
         if ((s->taken && s->taken[s->node_id]) ||
             ((s->flags & LSS_ASSIGN_CHECK_FREE) && m->taken_fn && m->taken_fn(m->taken_ud, s->node_id, &s->id))) {
                 m->result.in_use = true;
-                master_fail(m, LSS_E_CONFLICT, "node-ID %u already answered on the bus", s->node_id);
+                master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_IN_USE,
+                               "node-ID %u already answered on the bus", s->node_id);
                 goto out;
         }
         if (s->flags & LSS_ASSIGN_CHECK_FREE) {
@@ -93,7 +101,8 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                 PT_YIELD(&s->tail_pc);
                 if (m->step.n_answers > 0) {
                         m->result.in_use = true;
-                        master_fail(m, LSS_E_CONFLICT, "node-ID %u already answers on the bus", s->node_id);
+                        master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_IN_USE,
+                                       "node-ID %u already answers on the bus", s->node_id);
                         goto out;
                 }
         }
@@ -130,10 +139,11 @@ store:
         step_start(m);
         PT_YIELD(&s->tail_pc);
         if (!step_answered(m))
-                master_fail(m, LSS_E_VERIFY, "no boot-up from node %u after the assignment", s->node_id);
+                master_fail_at(m, LSS_E_VERIFY, LSS_SERVICE_VERIFY, LSS_REASON_NO_ANSWER,
+                               "no boot-up from node %u after the assignment", s->node_id);
         else if (step_conflict(m))
-                master_fail(m, LSS_E_CONFLICT, "more than one device booted up as node %u (duplicate identity?)",
-                            s->node_id);
+                master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_VERIFY, LSS_REASON_SEVERAL_ANSWERS,
+                               "more than one device booted up as node %u (duplicate identity?)", s->node_id);
         goto out;
 dry:
         m->result.dry = true;
@@ -151,6 +161,8 @@ static void identity_of_scan(lss_assign_state *s) {
 static void result_reset(lss_master *m) {
         m->result.changed = m->result.in_use = m->result.not_stored = m->result.dry = false;
         m->result.err = m->result.spec = 0;
+        m->result.failed_service = LSS_SERVICE_NONE;
+        m->result.reason = LSS_REASON_NONE;
         m->result.node_id = LSS_NODE_ID_UNCONFIGURED;
 }
 
@@ -160,8 +172,9 @@ int proc_assign(lss_master *m, lss_assign_state *s) {
         m->result.id = s->id;
         SELECT_RETRIED(m, &s->pc, s->attempt, &s->id);
         if (!step_answered(m)) {
-                master_fail(m, LSS_E_NOT_FOUND, "no slave %08x:%08x:%08x:%08x answered the selective switch",
-                            s->id.vendor, s->id.product, s->id.revision, s->id.serial);
+                master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER,
+                               "no slave %08x:%08x:%08x:%08x answered the selective switch", s->id.vendor,
+                               s->id.product, s->id.revision, s->id.serial);
                 goto out;
         }
         s->tail_pc = 0;
@@ -180,11 +193,13 @@ int proc_fastscan_assign(lss_master *m, lss_assign_state *s) {
                 s->fs.pc = 0;
                 PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
                 if (s->fs.none) {
-                        master_fail(m, LSS_E_NOT_FOUND, "no non-configured slave answered the fastscan");
+                        master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_FASTSCAN, LSS_REASON_NO_ANSWER,
+                                       "no non-configured slave answered the fastscan");
                         goto out;
                 }
                 if (!s->fs.found) {
-                        master_fail(m, LSS_E_INCOMPLETE, "fastscan did not converge");
+                        master_fail_at(m, LSS_E_INCOMPLETE, LSS_SERVICE_FASTSCAN, LSS_REASON_UNRESOLVED,
+                                       "fastscan did not converge");
                         goto out;
                 }
                 identity_of_scan(s);
@@ -201,7 +216,7 @@ int proc_fastscan_assign(lss_master *m, lss_assign_state *s) {
                         break;
                 m->stats.retries++;
                 if (s->attempt >= m->timing.cfg.retries) {
-                        master_fail(m, LSS_E_CONFLICT,
+                        master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_FASTSCAN, LSS_REASON_NOT_CONFIRMED,
                                     "the slave found by fastscan (%08x:%08x:%08x:%08x) did not confirm its identity",
                                     s->id.vendor, s->id.product, s->id.revision, s->id.serial);
                         goto out;

@@ -94,13 +94,14 @@ static bool already_handled(const lss_aa_state *s, const lss_identity *id) {
         return false;
 }
 
+bool lss_map_entry_matches(const lss_map_entry *e, const lss_identity *id) {
+        return lss_identity_matches(&e->id, e->revision_known, id);
+}
+
 static int lookup(const lss_autoassign_plan *p, const lss_identity *id) {
-        for (size_t i = 0; i < p->n_map; i++) {
-                const lss_map_entry *e = &p->map[i];
-                if (e->id.vendor == id->vendor && e->id.product == id->product && e->id.serial == id->serial &&
-                    (!e->revision_known || e->id.revision == id->revision))
+        for (size_t i = 0; i < p->n_map; i++)
+                if (lss_map_entry_matches(&p->map[i], id))
                         return (int) i;
-        }
         return -1;
 }
 
@@ -159,6 +160,8 @@ static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool 
                          m->timing.cfg.timeout_us / 1000);
         /* the pass goes on: one device's trouble is its own outcome */
         m->result.status = LSS_OK;
+        m->result.failed_service = LSS_SERVICE_NONE;
+        m->result.reason = LSS_REASON_NONE;
         m->result.message[0] = 0;
         m->result.in_use = false;
 }

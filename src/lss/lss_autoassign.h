@@ -30,6 +30,9 @@ typedef struct lss_map_entry {
         uint8_t node_id;
 } lss_map_entry;
 
+/* Whether the map entry names this device (lss_identity_matches()). */
+bool lss_map_entry_matches(const lss_map_entry *e, const lss_identity *id);
+
 enum lss_unknown_policy { LSS_UNKNOWN_IGNORE = 0, LSS_UNKNOWN_POOL };
 
 typedef struct lss_autoassign_plan {

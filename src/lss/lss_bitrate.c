@@ -97,8 +97,9 @@ static int proc_bitrate(lss_master *m) {
         }
         if (s->n_bad > 0) {
                 list_devices(s, LSS_BITRATE_UNREACHABLE, ids, sizeof(ids));
-                master_fail(m, LSS_E_NOT_FOUND, "%zu device%s did not answer at %u bit/s, nothing changed: %s",
-                            s->n_bad, s->n_bad == 1 ? "" : "s", s->p.old_bitrate, ids);
+                master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER,
+                               "%zu device%s did not answer at %u bit/s, nothing changed: %s", s->n_bad,
+                               s->n_bad == 1 ? "" : "s", s->p.old_bitrate, ids);
                 goto out;
         }
 
@@ -108,7 +109,8 @@ static int proc_bitrate(lss_master *m) {
                 SELECT_RETRIED(m, &s->pc, s->attempt, &s->p.devices[s->i].id);
                 if (!step_answered(m)) {
                         s->p.devices[s->i].outcome = LSS_BITRATE_UNREACHABLE;
-                        master_fail(m, LSS_E_NOT_FOUND, "device %08x:%08x:%08x:%08x stopped answering",
+                        master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER,
+                                       "device %08x:%08x:%08x:%08x stopped answering",
                                     s->p.devices[s->i].id.vendor, s->p.devices[s->i].id.product,
                                     s->p.devices[s->i].id.revision, s->p.devices[s->i].id.serial);
                         goto revert;
@@ -117,7 +119,7 @@ static int proc_bitrate(lss_master *m) {
                                 LSS_CS_CONFIGURE_BIT_TIMING);
                 if (!step_answered(m)) {
                         s->p.devices[s->i].outcome = LSS_BITRATE_SILENT;
-                        master_fail(m, LSS_E_REJECTED,
+                        master_fail_at(m, LSS_E_REJECTED, LSS_SERVICE_CONFIGURE_BIT_TIMING, LSS_REASON_NO_ANSWER,
                                     "device %08x:%08x:%08x:%08x did not answer Configure Bit Timing (table 0, "
                                     "index %u): taken as a refusal, nothing activated",
                                     s->p.devices[s->i].id.vendor, s->p.devices[s->i].id.product,
@@ -125,8 +127,9 @@ static int proc_bitrate(lss_master *m) {
                         goto revert;
                 }
                 if (step_conflict(m)) {
-                        master_fail(m, LSS_E_CONFLICT,
-                                    "more than one slave answered Configure Bit Timing (duplicate identity?)");
+                        master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_CONFIGURE_BIT_TIMING,
+                                       LSS_REASON_SEVERAL_ANSWERS,
+                                       "more than one slave answered Configure Bit Timing (duplicate identity?)");
                         goto revert;
                 }
                 s->p.devices[s->i].err = m->step.answer.data[1];
@@ -135,7 +138,7 @@ static int proc_bitrate(lss_master *m) {
                         s->p.devices[s->i].outcome = LSS_BITRATE_REFUSED;
                         m->result.err = s->p.devices[s->i].err;
                         m->result.spec = s->p.devices[s->i].spec;
-                        master_fail(m, LSS_E_REJECTED,
+                        master_fail_at(m, LSS_E_REJECTED, LSS_SERVICE_CONFIGURE_BIT_TIMING, LSS_REASON_REFUSED,
                                     "device %08x:%08x:%08x:%08x refused %u bit/s (table 0, index %u): error %u, "
                                     "spec %u; nothing activated",
                                     s->p.devices[s->i].id.vendor, s->p.devices[s->i].id.product,
@@ -231,7 +234,7 @@ static int proc_bitrate(lss_master *m) {
 
         if (s->n_bad > 0) {
                 list_devices(s, LSS_BITRATE_LOST, ids, sizeof(ids));
-                master_fail(m, LSS_E_INCOMPLETE,
+                master_fail_at(m, LSS_E_INCOMPLETE, LSS_SERVICE_ACTIVATE_BIT_TIMING, LSS_REASON_NO_ANSWER,
                             "partial switch: %zu of %zu device%s silent at %u bit/s (still at %u bit/s, in "
                             "configuration state?)%s: %s",
                             s->n_bad, s->p.n_devices, s->p.n_devices == 1 ? "" : "s", s->p.bitrate, s->p.old_bitrate,
@@ -243,8 +246,8 @@ static int proc_bitrate(lss_master *m) {
                             "retuned (%s)", s->p.bitrate, lss_retune_name(s->retune));
         } else if (count(s, LSS_BITRATE_STORE_FAILED) > 0) {
                 list_devices(s, LSS_BITRATE_STORE_FAILED, ids, sizeof(ids));
-                master_fail(m, LSS_E_REJECTED, "switched to %u bit/s, but Store Configuration failed on: %s",
-                            s->p.bitrate, ids);
+                master_fail_at(m, LSS_E_REJECTED, LSS_SERVICE_STORE, LSS_REASON_REFUSED,
+                               "switched to %u bit/s, but Store Configuration failed on: %s", s->p.bitrate, ids);
         }
         goto out;
 

@@ -230,7 +230,11 @@ bool configure_answer_ok(lss_master *m, uint8_t node_id);
 bool store_answer_ok(lss_master *m);
 
 /* master.c */
+/* The operation failed: master_fail() for a failure that is not one
+ * service's (codes NONE), master_fail_at() with the service and the reason. */
 void master_fail(lss_master *m, enum lss_status st, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+void master_fail_at(lss_master *m, enum lss_status st, enum lss_service service, enum lss_reason reason,
+                    const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 int master_add_device(lss_master *m, const lss_identity *id, uint8_t node_id);
 /* A device is confirmed: tell the caller (lss_master_set_found), once per
  * identity in an operation. */

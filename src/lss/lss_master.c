@@ -26,6 +26,34 @@ const char *lss_status_name(enum lss_status s) {
         return (unsigned) s < sizeof(names) / sizeof(names[0]) && names[s] ? names[s] : "unknown";
 }
 
+const char *lss_service_name(enum lss_service s) {
+        static const char *const names[_LSS_SERVICE_MAX] = {
+                [LSS_SERVICE_NONE] = "none",
+                [LSS_SERVICE_SWITCH_SELECTIVE] = "Switch State Selective",
+                [LSS_SERVICE_CONFIGURE_NODE_ID] = "Configure Node-ID",
+                [LSS_SERVICE_CONFIGURE_BIT_TIMING] = "Configure Bit Timing",
+                [LSS_SERVICE_ACTIVATE_BIT_TIMING] = "Activate Bit Timing",
+                [LSS_SERVICE_STORE] = "Store Configuration",
+                [LSS_SERVICE_INQUIRE] = "Inquire",
+                [LSS_SERVICE_FASTSCAN] = "Fastscan",
+                [LSS_SERVICE_VERIFY] = "verification",
+        };
+        return (unsigned) s < _LSS_SERVICE_MAX ? names[s] : NULL;
+}
+
+const char *lss_reason_name(enum lss_reason r) {
+        static const char *const names[_LSS_REASON_MAX] = {
+                [LSS_REASON_NONE] = "none",
+                [LSS_REASON_NO_ANSWER] = "no-answer",
+                [LSS_REASON_REFUSED] = "refused",
+                [LSS_REASON_SEVERAL_ANSWERS] = "several-answers",
+                [LSS_REASON_IN_USE] = "in-use",
+                [LSS_REASON_NOT_CONFIRMED] = "not-confirmed",
+                [LSS_REASON_UNRESOLVED] = "unresolved",
+        };
+        return (unsigned) r < _LSS_REASON_MAX ? names[r] : NULL;
+}
+
 lss_master *lss_master_new(const lss_timing_config *cfg) {
         lss_master *m = calloc(1, sizeof(*m));
         if (!m)
@@ -114,6 +142,19 @@ const char *lss_store_error_name(uint8_t err) {
 void master_fail(lss_master *m, enum lss_status st, const char *fmt, ...) {
         va_list ap;
         m->result.status = st;
+        m->result.failed_service = LSS_SERVICE_NONE;
+        m->result.reason = LSS_REASON_NONE;
+        va_start(ap, fmt);
+        vsnprintf(m->result.message, sizeof(m->result.message), fmt, ap);
+        va_end(ap);
+}
+
+void master_fail_at(lss_master *m, enum lss_status st, enum lss_service service, enum lss_reason reason,
+                    const char *fmt, ...) {
+        va_list ap;
+        m->result.status = st;
+        m->result.failed_service = service;
+        m->result.reason = reason;
         va_start(ap, fmt);
         vsnprintf(m->result.message, sizeof(m->result.message), fmt, ap);
         va_end(ap);
@@ -210,39 +251,41 @@ static int proc_switch_selective(lss_master *m) {
         PT_YIELD(&m->pc);
         m->result.found = step_answered(m);
         if (!m->result.found)
-                master_fail(m, LSS_E_NO_RESPONSE, "no slave answered the selective switch");
+                master_fail_at(m, LSS_E_NO_RESPONSE, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER,
+                               "no slave answered the selective switch");
         PT_END(&m->pc);
 }
 
 /* The checks every confirmed single-slave service shares. */
-static bool single_answer_ok(lss_master *m, const char *what) {
+static bool single_answer_ok(lss_master *m, enum lss_service service, const char *what) {
         if (!step_answered(m)) {
-                master_fail(m, LSS_E_NO_RESPONSE, "%s: no answer (is a slave in configuration state?)", what);
+                master_fail_at(m, LSS_E_NO_RESPONSE, service, LSS_REASON_NO_ANSWER,
+                               "%s: no answer (is a slave in configuration state?)", what);
                 return false;
         }
         if (step_conflict(m)) {
-                master_fail(m, LSS_E_CONFLICT, "%s: different answers from more than one slave in configuration state",
-                            what);
+                master_fail_at(m, LSS_E_CONFLICT, service, LSS_REASON_SEVERAL_ANSWERS,
+                               "%s: different answers from more than one slave in configuration state", what);
                 return false;
         }
         return true;
 }
 
-static bool error_code_ok(lss_master *m, const char *what) {
+static bool error_code_ok(lss_master *m, enum lss_service service) {
         m->result.err = m->step.answer.data[1];
         m->result.spec = m->step.answer.data[2];
         if (m->result.err == 0)
                 return true;
-        master_fail(m, LSS_E_REJECTED, "%s rejected by the slave: error %u, spec %u", what, m->result.err,
-                    m->result.spec);
+        master_fail_at(m, LSS_E_REJECTED, service, LSS_REASON_REFUSED, "%s rejected by the slave: error %u, spec %u",
+                       lss_service_name(service), m->result.err, m->result.spec);
         return false;
 }
 
 static int proc_configure_node_id(lss_master *m) {
         PT_BEGIN(&m->pc);
         STEP_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, m->arg.raw.a), LSS_CS_CONFIGURE_NODE_ID);
-        if (single_answer_ok(m, "Configure Node-ID"))
-                error_code_ok(m, "Configure Node-ID");
+        if (single_answer_ok(m, LSS_SERVICE_CONFIGURE_NODE_ID, "Configure Node-ID"))
+                error_code_ok(m, LSS_SERVICE_CONFIGURE_NODE_ID);
         PT_END(&m->pc);
 }
 
@@ -256,8 +299,9 @@ static int proc_configure_node_id_checked(lss_master *m) {
          * serial tells them apart */
         STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, LSS_FIELD_SERIAL), LSS_CS_INQUIRE_SERIAL);
         if (step_conflict(m)) {
-                master_fail(m, LSS_E_CONFLICT, "more than one slave is in configuration state: Configure Node-ID %u "
-                            "would give node-ID %u to all of them", node_id, node_id);
+                master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_SEVERAL_ANSWERS,
+                               "more than one slave is in configuration state: Configure Node-ID %u would give "
+                               "node-ID %u to all of them", node_id, node_id);
                 goto out;
         }
         STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
@@ -265,20 +309,22 @@ static int proc_configure_node_id_checked(lss_master *m) {
                 goto configure; /* its own node-ID */
         if (m->taken_fn && m->taken_fn(m->taken_ud, node_id, NULL)) {
                 m->result.in_use = true;
-                master_fail(m, LSS_E_CONFLICT, "node-ID %u already answered on the bus", node_id);
+                master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_IN_USE,
+                               "node-ID %u already answered on the bus", node_id);
                 goto out;
         }
         step_node_in_use(m, node_id);
         PT_YIELD(&m->pc);
         if (m->step.n_answers > 0) {
                 m->result.in_use = true;
-                master_fail(m, LSS_E_CONFLICT, "node-ID %u already answers on the bus", node_id);
+                master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_IN_USE,
+                               "node-ID %u already answers on the bus", node_id);
                 goto out;
         }
 configure:
         STEP_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, node_id), LSS_CS_CONFIGURE_NODE_ID);
-        if (single_answer_ok(m, "Configure Node-ID"))
-                error_code_ok(m, "Configure Node-ID");
+        if (single_answer_ok(m, LSS_SERVICE_CONFIGURE_NODE_ID, "Configure Node-ID"))
+                error_code_ok(m, LSS_SERVICE_CONFIGURE_NODE_ID);
 out:;
         PT_END(&m->pc);
 }
@@ -287,8 +333,8 @@ static int proc_configure_bit_timing(lss_master *m) {
         PT_BEGIN(&m->pc);
         STEP_REQUEST(m, &m->pc, lss_encode_configure_bit_timing(&f__, m->arg.raw.a, m->arg.raw.b),
                      LSS_CS_CONFIGURE_BIT_TIMING);
-        if (single_answer_ok(m, "Configure Bit Timing"))
-                error_code_ok(m, "Configure Bit Timing");
+        if (single_answer_ok(m, LSS_SERVICE_CONFIGURE_BIT_TIMING, "Configure Bit Timing"))
+                error_code_ok(m, LSS_SERVICE_CONFIGURE_BIT_TIMING);
         PT_END(&m->pc);
 }
 
@@ -301,8 +347,8 @@ static int proc_activate_bit_timing(lss_master *m) {
 static int proc_store(lss_master *m) {
         PT_BEGIN(&m->pc);
         STEP_REQUEST(m, &m->pc, lss_encode_store(&f__), LSS_CS_STORE);
-        if (single_answer_ok(m, "Store Configuration"))
-                error_code_ok(m, "Store Configuration");
+        if (single_answer_ok(m, LSS_SERVICE_STORE, "Store Configuration"))
+                error_code_ok(m, LSS_SERVICE_STORE);
         PT_END(&m->pc);
 }
 
@@ -313,7 +359,7 @@ static int proc_inquire(lss_master *m) {
         PT_BEGIN(&m->pc);
         STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.field),
                      LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.field);
-        if (single_answer_ok(m, inquire_names[m->arg.inq.field])) {
+        if (single_answer_ok(m, LSS_SERVICE_INQUIRE, inquire_names[m->arg.inq.field])) {
                 if (m->arg.inq.field == LSS_FIELD_COUNT)
                         m->result.node_id = m->step.answer.data[1];
                 else
@@ -327,7 +373,7 @@ static int proc_inquire_identity(lss_master *m) {
         for (m->arg.inq.i = 0; m->arg.inq.i < LSS_FIELD_COUNT; m->arg.inq.i++) {
                 STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.i),
                              LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.i);
-                if (!single_answer_ok(m, inquire_names[m->arg.inq.i]))
+                if (!single_answer_ok(m, LSS_SERVICE_INQUIRE, inquire_names[m->arg.inq.i]))
                         break;
                 lss_identity_set_field(&m->result.id, m->arg.inq.i, lss_get_u32(m->step.answer.data + 1));
         }
@@ -389,23 +435,28 @@ static int proc_fastscan_top(lss_master *m) {
                 if (m->sc.confirm == CONFIRM_OK)
                         m->result.found = true;
                 else if (m->sc.confirm == CONFIRM_NOBODY)
-                        master_fail(m, LSS_E_NOT_FOUND, "no device: fastscan made up %08x:%08x:%08x:%08x but no slave "
-                                    "in configuration state confirmed it", m->sc.found.vendor, m->sc.found.product,
-                                    m->sc.found.revision, m->sc.found.serial);
+                        master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_FASTSCAN, LSS_REASON_NOT_CONFIRMED,
+                                       "no device: fastscan made up %08x:%08x:%08x:%08x but no slave in "
+                                       "configuration state confirmed it", m->sc.found.vendor, m->sc.found.product,
+                                       m->sc.found.revision, m->sc.found.serial);
                 else if (m->sc.confirm == CONFIRM_OTHER) {
                         m->result.id = m->sc.other;
-                        master_fail(m, LSS_E_CONFLICT, "slave %08x:%08x:%08x:%08x entered configuration state on a "
+                        master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_FASTSCAN, LSS_REASON_NOT_CONFIRMED,
+                                    "slave %08x:%08x:%08x:%08x entered configuration state on a "
                                     "Fastscan for %08x:%08x:%08x:%08x: it does not follow CiA 305",
                                     m->sc.other.vendor, m->sc.other.product, m->sc.other.revision, m->sc.other.serial,
                                     m->sc.found.vendor, m->sc.found.product, m->sc.found.revision,
                                     m->sc.found.serial);
                 } else
-                        master_fail(m, LSS_E_CONFLICT, "the identity fastscan found could not be confirmed: "
-                                    "several slaves answered Inquire Identity");
+                        master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_FASTSCAN, LSS_REASON_SEVERAL_ANSWERS,
+                                       "the identity fastscan found could not be confirmed: "
+                                       "several slaves answered Inquire Identity");
         } else if (m->fs.none)
-                master_fail(m, LSS_E_NOT_FOUND, "no device: no non-configured slave answered the fastscan");
+                master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_FASTSCAN, LSS_REASON_NO_ANSWER,
+                               "no device: no non-configured slave answered the fastscan");
         else
-                master_fail(m, LSS_E_INCOMPLETE, "fastscan did not converge after %u attempts", m->fs.attempt);
+                master_fail_at(m, LSS_E_INCOMPLETE, LSS_SERVICE_FASTSCAN, LSS_REASON_UNRESOLVED,
+                               "fastscan did not converge after %u attempts", m->fs.attempt);
         PT_END(&m->pc);
 }
 

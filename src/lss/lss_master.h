@@ -43,6 +43,39 @@ enum lss_status {
 };
 
 const char *lss_status_name(enum lss_status s);
+
+/* Which service a failure is about (lss_result.failed_service), as a code:
+ * callers classify failures by it, never by the message text. */
+enum lss_service {
+        LSS_SERVICE_NONE = 0,            /* not one service's failure (a scan, a cancel, the transport) */
+        LSS_SERVICE_SWITCH_SELECTIVE,    /* Switch State Selective: the addressed slave */
+        LSS_SERVICE_CONFIGURE_NODE_ID,
+        LSS_SERVICE_CONFIGURE_BIT_TIMING,
+        LSS_SERVICE_ACTIVATE_BIT_TIMING, /* the switch to the new rate (SetBitrate's verification) */
+        LSS_SERVICE_STORE,               /* Store Configuration */
+        LSS_SERVICE_INQUIRE,             /* Inquire Vendor-ID .. Node-ID */
+        LSS_SERVICE_FASTSCAN,
+        LSS_SERVICE_VERIFY,              /* the check after a change: boot-up, or Inquire Node-ID after a reset */
+        _LSS_SERVICE_MAX,
+};
+
+/* Why that service failed (lss_result.reason). */
+enum lss_reason {
+        LSS_REASON_NONE = 0,
+        LSS_REASON_NO_ANSWER,            /* nobody answered */
+        LSS_REASON_REFUSED,              /* the slave answered with error code result.err (result.spec) */
+        LSS_REASON_SEVERAL_ANSWERS,      /* more than one slave answered where one may */
+        LSS_REASON_IN_USE,               /* the node-ID already answers on the bus (result.in_use) */
+        LSS_REASON_NOT_CONFIRMED,        /* an answer came, but not the one that confirms it */
+        LSS_REASON_UNRESOLVED,           /* the answers did not add up to one identity (fastscan) */
+        _LSS_REASON_MAX,
+};
+
+/* "Configure Node-ID", "Store Configuration", ...; "none" for
+ * LSS_SERVICE_NONE, NULL when out of range. */
+const char *lss_service_name(enum lss_service s);
+/* "no-answer", "refused", ...; NULL when out of range. */
+const char *lss_reason_name(enum lss_reason r);
 /* CiA 305's meaning of a Store Configuration error code. */
 const char *lss_store_error_name(uint8_t err);
 
@@ -98,6 +131,9 @@ typedef struct lss_result {
         lss_identity id;     /* fastscan, inquire identity */
         lss_device *devices; /* scans: every slave found (owned by the engine until next start) */
         size_t n_devices;
+        /* a failure: which service, why (codes; the message says it for people) */
+        enum lss_service failed_service;
+        enum lss_reason reason;
         char message[160];   /* human-readable detail for errors */
 } lss_result;
 

@@ -165,6 +165,11 @@ bool lss_identity_equal(const lss_identity *a, const lss_identity *b) {
         return lss_identity_compare(a, b) == 0;
 }
 
+bool lss_identity_matches(const lss_identity *entry, bool revision_known, const lss_identity *id) {
+        return entry->vendor == id->vendor && entry->product == id->product && entry->serial == id->serial &&
+               (!revision_known || entry->revision == id->revision);
+}
+
 int lss_identity_compare(const lss_identity *a, const lss_identity *b) {
         for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
                 uint32_t x = lss_identity_field(a, i), y = lss_identity_field(b, i);

@@ -125,6 +125,10 @@ uint32_t lss_identity_field(const lss_identity *id, enum lss_field field);
 void lss_identity_set_field(lss_identity *id, enum lss_field field, uint32_t value);
 bool lss_identity_equal(const lss_identity *a, const lss_identity *b);
 int lss_identity_compare(const lss_identity *a, const lss_identity *b);
+/* The map-matching rule, its one home: `id` is the device a map entry for
+ * `entry` names when vendor, product and serial are equal, and the revision
+ * too unless the entry has none (`revision_known` false: any revision). */
+bool lss_identity_matches(const lss_identity *entry, bool revision_known, const lss_identity *id);
 /* Table 0 (CiA 301/305): bit rate for index, 0 if none/auto. */
 uint32_t lss_bit_timing_rate(uint8_t index);
 /* Table 0 index for a bit rate, -1 if the table has none. */

@@ -17,8 +17,9 @@ int proc_unassign(lss_master *m, lss_assign_state *s) {
         m->result.node_id = LSS_NODE_ID_UNCONFIGURED;
         SELECT_RETRIED(m, &s->pc, s->attempt, &s->id);
         if (!step_answered(m)) {
-                master_fail(m, LSS_E_NOT_FOUND, "no slave %08x:%08x:%08x:%08x answered the selective switch",
-                            s->id.vendor, s->id.product, s->id.revision, s->id.serial);
+                master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER,
+                               "no slave %08x:%08x:%08x:%08x answered the selective switch", s->id.vendor,
+                               s->id.product, s->id.revision, s->id.serial);
                 goto out;
         }
         REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
@@ -76,11 +77,13 @@ int proc_unassign(lss_master *m, lss_assign_state *s) {
                 m->stats.retries++;
         }
         if (s->seen)
-                master_fail(m, LSS_E_VERIFY, "node-ID 255 was configured%s, but after NMT Reset Communication the "
-                            "device still answers as node %u", m->result.stored ? " and stored" : "", s->seen);
+                master_fail_at(m, LSS_E_VERIFY, LSS_SERVICE_VERIFY, LSS_REASON_NOT_CONFIRMED,
+                               "node-ID 255 was configured%s, but after NMT Reset Communication the device still "
+                               "answers as node %u", m->result.stored ? " and stored" : "", s->seen);
         else
-                master_fail(m, LSS_E_VERIFY, "node-ID 255 was configured%s, but the device did not answer after NMT "
-                            "Reset Communication", m->result.stored ? " and stored" : "");
+                master_fail_at(m, LSS_E_VERIFY, LSS_SERVICE_VERIFY, LSS_REASON_NO_ANSWER,
+                               "node-ID 255 was configured%s, but the device did not answer after NMT Reset "
+                               "Communication", m->result.stored ? " and stored" : "");
 out:;
         PT_END(&s->pc);
 }

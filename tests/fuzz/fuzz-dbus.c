@@ -132,7 +132,7 @@ static int gen_string(sd_bus_message *m, char t, input *in) {
         char s[64];
         uint8_t c = next(in);
         if (t == 'o')
-                return sd_bus_message_append_basic(m, 'o', c & 1 ? "/org/lssd/LSS1" : "/");
+                return sd_bus_message_append_basic(m, 'o', c & 1 ? LSSD_ROOT_PATH : "/");
         if (t == 'g')
                 return sd_bus_message_append_basic(m, 'g', c & 1 ? "a{sv}" : "u");
         if (c < 160)
@@ -430,8 +430,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         } else
                 snprintf(sig, sizeof(sig), "%s", method_signature(k));
 
-        r = sd_bus_message_new_method_call(fuzz_bus(), &m, "org.lssd.LSS1", "/org/lssd/LSS1/buses/vcan0",
-                                           "org.lssd.LSS1.Bus", "Fuzz");
+        r = sd_bus_message_new_method_call(fuzz_bus(), &m, LSSD_BUS_NAME, LSSD_BUSES_PATH "/vcan0",
+                                           LSSD_BUS_IFACE, "Fuzz");
         if (r < 0)
                 abort();
         for (const char *t = sig; *t; t += type_len(t)) {

@@ -17,7 +17,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from lssdtest import (BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, Env, Skip, Slave, auto_assign,  # noqa: E402
+from lssdtest import (BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, SERVICE, Env, Skip, Slave, auto_assign,  # noqa: E402
                       bus_path, device_path, log, run, unit_exec_start)
 
 B0 = bus_path('vcan0')
@@ -222,7 +222,7 @@ def test_mixed():
     cfg = config('vcan0', MIXED_MAP, vendor=hex(V), product=hex(P), unknown='ignore', pool=[20, 21])
     with Env({'vcan0': MIXED}, config=cfg, candump=True) as env:
         c = env.connect()
-        c.add_match("type='signal',sender='org.lssd.LSS1'")
+        c.add_match(f"type='signal',sender='{SERVICE}'")
         got, outcomes, result = auto_assign(env)
         expect_eq(sorted(tuple(x) for x in got), sorted([A.identity + (255, 5), B.identity + (9, 6)]),
                   'AutoAssign reply')
@@ -521,7 +521,7 @@ def test_bad_config():
         # running: a bad file on reload keeps the map in force
         env._start_lssd()
         p = dev('vcan0', A)
-        env.wait_until(lambda: env.busctl('get-property', 'org.lssd.LSS1', p, DEVICE_IFACE, 'NodeId').rc == 0 and
+        env.wait_until(lambda: env.busctl('get-property', SERVICE, p, DEVICE_IFACE, 'NodeId').rc == 0 and
                        env.get(p, DEVICE_IFACE, 'NodeId') == 5, timeout=600, what='the boot pass')
         for name, path in files.items():
             with open(path, 'rb') as src, open(env.config_path, 'wb') as dst:

@@ -28,7 +28,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from lssdtest import BUS_IFACE, ERR, Env, Skip, Slave, bus_path, log, run  # noqa: E402
+from lssdtest import BUS_IFACE, ERR, SERVICE, Env, Skip, Slave, bus_path, log, run  # noqa: E402
 
 CONFIG = """
 lss_timeout_ms = @TIMEOUT@;
@@ -122,7 +122,7 @@ class Backend:
         if skip_missing:
             opts += ['skip_missing', 'b', 'true']
         opts[1] = (len(opts) - 2) // 3
-        return env.busctl('call', 'org.lssd.LSS1', self.path, BUS_IFACE, 'SetBitrate', 'uqa{sv}', str(rate),
+        return env.busctl('call', SERVICE, self.path, BUS_IFACE, 'SetBitrate', 'uqa{sv}', str(rate),
                           str(delay), *[str(o) for o in opts[1:]])
 
     def slave_index(self, env, s, key='bit_timing_index'):

@@ -19,8 +19,8 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from lssdtest import (BUS_IFACE, DEVICE_IFACE, SERVICE, SOURCE_ROOT, Env, Skip, Slave, bus_path, device_path,  # noqa: E402
-                      run)
+from lssdtest import (BUS_IFACE, DEVICE_IFACE, ERR, ERRORS, SERVICE, SOURCE_ROOT, Env, Skip, Slave, bus_path,  # noqa: E402
+                      device_path, run)
 
 B0 = bus_path('vcan0')
 B1 = bus_path('vcan1')
@@ -477,7 +477,7 @@ def test_assign_taken():
         untouched('raw configure-node-id')
         name, msg = env.call_error(B0, BUS_IFACE, 'Execute', 'a(sv)', 2, 'SwitchModeSelective', '(uuuu)',
                                    *SLAVES[0].identity, 'ConfigureNodeId', '(yb)', 12, 'false')
-        expect_eq(name, 'org.lssd.LSS1.Error.Conflict', 'Execute ConfigureNodeId (12, false): ' + msg)
+        expect_eq(name, ERR + 'Conflict', 'Execute ConfigureNodeId (12, false): ' + msg)
         expect(msg.startswith('steps[1] (ConfigureNodeId): Node-ID 12 is taken on vcan0'), 'Execute: ' + msg)
         untouched('Execute ConfigureNodeId')
         if env.real:
@@ -680,7 +680,7 @@ def test_cancel():
     with Env({'vcan0': slaves}) as env:
         ctl = Ctl(env)
         c = env.connect()
-        c.add_match("type='signal',sender='org.lssd.LSS1',interface='org.lssd.LSS1.Bus'")
+        c.add_match(f"type='signal',sender='{SERVICE}',interface='{BUS_IFACE}'")
         p = ctl.spawn('scan', '--json')
         env.wait_until(lambda: env.get(B0, BUS_IFACE, 'Job') == 'Scan', what='the scan to run')
         p.send_signal(signal.SIGINT)
@@ -709,6 +709,9 @@ def test_cancel():
 # ---- failures ----
 
 def test_errors():
+    # the exit status each lssd error has in its one home is lssctl(1)'s
+    for sym, (name, code) in ERRORS.items():
+        expect_eq(code, EXIT.get(sym.lower().replace('_', '-')), 'exit status of %s in src/names/lssd_names.h' % name)
     slaves = [Slave(0x9A, 3, 1, 0x1000 + i) for i in range(6)]
     with Env({'vcan0': slaves}, lssd_args=['--queue-size', '1']) as env:
         ctl = Ctl(env)

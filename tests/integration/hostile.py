@@ -17,8 +17,8 @@ import xml.etree.ElementTree as ET
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import dbusmini  # noqa: E402
-from lssdtest import (ACCESS_DENIED, BUS_IFACE, ERR, INVALID_ARGS, MANAGER, SERVICE, SOURCE_ROOT, Env, Skip,  # noqa: E402
-                      Slave, bus_path, device_path, log, run)
+from lssdtest import (ACCESS_DENIED, BUS_IFACE, DEVICE_IFACE, ERR, INVALID_ARGS, MANAGER, MANAGER_IFACE,  # noqa: E402
+                      SERVICE, SOURCE_ROOT, Env, Skip, Slave, bus_path, device_path, log, run)
 
 B0 = bus_path('vcan0')
 SLAVES = [Slave(0x9A, 3, 1, 100 + i, 10 + i) for i in range(4)]
@@ -277,7 +277,7 @@ def test_odd_text():
                     (B0, BUS_IFACE, 'Execute', 'a(sv)', [[(name, ('y', 1))]]),
                     (B0, BUS_IFACE, 'Scan', 'a{sv}', [{name: ('u', 1)}]),
                     (B0, BUS_IFACE, 'AutoAssign', 'a{sv}', [{name: ('b', True)}]),
-                    ('/org/lssd/LSS1/Manager', 'org.lssd.LSS1.Manager', 'GetBus', 's', [name])]:
+                    (MANAGER, MANAGER_IFACE, 'GetBus', 's', [name])]:
                 try:
                     c.call(SERVICE, path, iface, method, sig, body, timeout=30)
                     raise AssertionError('%s(%r) succeeded' % (method, name))
@@ -332,9 +332,9 @@ def test_watchdog():
 # ---- the policy, member by member ----
 
 # what the policy lets everyone call (besides Introspectable, Peer, Properties.Get/GetAll, ObjectManager)
-OPEN_MEMBERS = {('org.lssd.LSS1.Manager', 'GetBus')}
+OPEN_MEMBERS = {(MANAGER_IFACE, 'GetBus')}
 # no-ops that answer before any check when there is nothing to do (nothing is sent, nothing changes)
-NOOP_WHEN_IDLE = {('org.lssd.LSS1.Bus', 'Cancel'), ('org.lssd.LSS1.Bus', 'Release')}
+NOOP_WHEN_IDLE = {(BUS_IFACE, 'Cancel'), (BUS_IFACE, 'Release')}
 # valid arguments where the generic defaults would be refused before the credential check
 VALID_ARGS = {'SetBitrate': [250000, 10, {}], 'ConfigureBitTiming': [0, 2]}
 
@@ -413,8 +413,8 @@ def policy_every_member(open_policy):
     s = SLAVES[0]
     with Env({'vcan0': [s]}, lssd_policy_override=open_policy) as env:
         env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 2, 'vendor', 'u', s.vendor, 'product', 'u', s.product)
-        objects = {'org.lssd.LSS1.Manager': MANAGER, 'org.lssd.LSS1.Bus': B0,
-                   'org.lssd.LSS1.Device': device_path('vcan0', *s.identity)}
+        objects = {MANAGER_IFACE: MANAGER, BUS_IFACE: B0,
+                   DEVICE_IFACE: device_path('vcan0', *s.identity)}
         p = subprocess.run(['setpriv', '--reuid=nobody', '--regid=nogroup', '--clear-groups', sys.executable,
                             os.path.abspath(__file__), '_member-calls', json.dumps(objects)],
                            capture_output=True, text=True, timeout=600,

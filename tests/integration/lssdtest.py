@@ -28,18 +28,37 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import dbusmini  # noqa: E402
 
 SKIP = 77
-SERVICE = 'org.lssd.LSS1'
-ROOT = '/org/lssd/LSS1'
-MANAGER = ROOT + '/Manager'
-MANAGER_IFACE = 'org.lssd.LSS1.Manager'
-BUS_IFACE = 'org.lssd.LSS1.Bus'
-DEVICE_IFACE = 'org.lssd.LSS1.Device'
-ERR = 'org.lssd.LSS1.Error.'
-INVALID_ARGS = 'org.freedesktop.DBus.Error.InvalidArgs'
-ACCESS_DENIED = 'org.freedesktop.DBus.Error.AccessDenied'
-
 SOURCE_ROOT = os.environ.get('LSSD_SOURCE_ROOT',
                              os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+NAMES_HEADER = os.path.join(SOURCE_ROOT, 'src', 'names', 'lssd_names.h')
+
+
+def read_names(path=NAMES_HEADER):
+    """lssd's D-Bus names from their one home, src/names/lssd_names.h: (the
+    #define'd strings {LSSD_X: value}, the error rows {SYMBOL: (name, lssctl
+    exit status)})."""
+    with open(path) as f:
+        text = f.read()
+    token = r'(?:"[^"]*"|LSSD_\w+)'
+    names = {}
+    for m in re.finditer(r'^#define (LSSD_\w+)[ \t]+(%s(?:[ \t]+%s)*)[ \t]*$' % (token, token), text, re.M):
+        names[m.group(1)] = ''.join(lit or names[ref] for lit, ref in re.findall(r'"([^"]*)"|(LSSD_\w+)', m.group(2)))
+    errors = {m.group(1): (names['LSSD_ERROR_' + m.group(1)], int(m.group(2)))
+              for m in re.finditer(r'^\s*X\((\w+), \w+, (\d+),', text, re.M)}
+    assert names and errors, 'no names in ' + path
+    return names, errors
+
+
+NAMES, ERRORS = read_names()
+SERVICE = NAMES['LSSD_BUS_NAME']
+ROOT = NAMES['LSSD_ROOT_PATH']
+MANAGER = NAMES['LSSD_MANAGER_PATH']
+MANAGER_IFACE = NAMES['LSSD_MANAGER_IFACE']
+BUS_IFACE = NAMES['LSSD_BUS_IFACE']
+DEVICE_IFACE = NAMES['LSSD_DEVICE_IFACE']
+ERR = NAMES['LSSD_ERROR_PREFIX']
+INVALID_ARGS = 'org.freedesktop.DBus.Error.InvalidArgs'
+ACCESS_DENIED = 'org.freedesktop.DBus.Error.AccessDenied'
 
 
 class Skip(Exception):
@@ -57,7 +76,7 @@ def unit_exec_start(config_path):
 
 
 def bus_path(ifname):
-    return ROOT + '/buses/' + ''.join(c if c.isascii() and c.isalnum() else '_%02x' % ord(c) for c in ifname)
+    return NAMES['LSSD_BUSES_PATH'] + '/' + ''.join(c if c.isascii() and c.isalnum() else '_%02x' % ord(c) for c in ifname)
 
 
 def device_path(ifname, v, p, r, s):

@@ -57,7 +57,7 @@ def dev(ifname, s):
 
 
 def lssd_signals(c):
-    c.add_match("type='signal',sender='org.lssd.LSS1'")
+    c.add_match(f"type='signal',sender='{SERVICE}'")
 
 
 def expect(cond, what):
@@ -141,8 +141,8 @@ def test_properties():
 
         # Job, Progress and State change while a scan runs, with PropertiesChanged
         c = env.connect()
-        c.add_match("type='signal',sender='org.lssd.LSS1',interface='org.freedesktop.DBus.Properties'")
-        c.add_match("type='signal',sender='org.lssd.LSS1',interface='org.lssd.LSS1.Bus'")
+        c.add_match(f"type='signal',sender='{SERVICE}',interface='org.freedesktop.DBus.Properties'")
+        c.add_match(f"type='signal',sender='{SERVICE}',interface='{BUS_IFACE}'")
         serial = c.send(SERVICE, B0, BUS_IFACE, 'Scan', 'a{sv}', [{'vendor': ('u', 0xEC), 'product': ('u', 0x1234)}])
         seen_job = c.wait_signal(lambda m: m.member == 'PropertiesChanged' and m.path == B0 and
                                  m.body[1].get('Job') == ('s', 'Scan'))
@@ -164,7 +164,7 @@ def test_scan():
     with Env({'vcan0': SLAVES}, config=CONFIG % '') as env:
         c = env.connect()
         lssd_signals(c)
-        c.add_match("type='signal',sender='org.lssd.LSS1',interface='org.freedesktop.DBus.ObjectManager'")
+        c.add_match(f"type='signal',sender='{SERVICE}',interface='org.freedesktop.DBus.ObjectManager'")
         found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)[0]
         want = sorted([list(s.identity) + [s.node_id] for s in SLAVES])
         expect_eq(sorted(found), want, 'Scan result')
@@ -668,7 +668,7 @@ def test_unprivileged():
         expect_eq(env.get(MANAGER, MANAGER_IFACE, 'Buses', **nobody), [B0], 'Buses as nobody')
         expect_eq(env.call(MANAGER, MANAGER_IFACE, 'GetBus', 's', 'vcan0', **nobody), [B0], 'GetBus as nobody')
         r = env.busctl('introspect', '--xml-interface', SERVICE, B0, json_out=False, **nobody)
-        expect(r.rc == 0 and 'org.lssd.LSS1.Bus' in r.stdout, 'introspect as nobody: %r' % r)
+        expect(r.rc == 0 and BUS_IFACE in r.stdout, 'introspect as nobody: %r' % r)
         objs = env.call(ROOT, 'org.freedesktop.DBus.ObjectManager', 'GetManagedObjects', **nobody)[0]
         expect(d in objs, 'GetManagedObjects as nobody')
         # changing is not
@@ -891,8 +891,8 @@ def test_second_instance():
 def test_reload():
     with Env({'vcan0': SLAVES, 'vcan1': []}, config=CONFIG % '') as env:
         c = env.connect()
-        c.add_match("type='signal',sender='org.lssd.LSS1',interface='org.freedesktop.DBus.ObjectManager'")
-        c.add_match("type='signal',sender='org.lssd.LSS1',interface='org.freedesktop.DBus.Properties'")
+        c.add_match(f"type='signal',sender='{SERVICE}',interface='org.freedesktop.DBus.ObjectManager'")
+        c.add_match(f"type='signal',sender='{SERVICE}',interface='org.freedesktop.DBus.Properties'")
         expect_eq(env.get(MANAGER, MANAGER_IFACE, 'Buses'), [B0], 'Buses at start')
         env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)
         d = dev('vcan0', SLAVES[0])
@@ -932,7 +932,7 @@ def test_bus_down():
         if not env.real:
             raise Skip('needs a real interface to take down')
         c = env.connect()
-        c.add_match("type='signal',sender='org.lssd.LSS1',interface='org.freedesktop.DBus.Properties'")
+        c.add_match(f"type='signal',sender='{SERVICE}',interface='org.freedesktop.DBus.Properties'")
         try:
             subprocess.run(['ip', 'link', 'set', 'vcan1', 'down'], check=True)
             env.wait_until(lambda: env.get(B1, BUS_IFACE, 'State') == 'down', what='State down')
@@ -1094,7 +1094,7 @@ def test_startup_order():
     the VM's scan test caught one), and the first frame comes after it."""
     with Env({'vcan0': SLAVES[:1]}, config=CONFIG % '', start_lssd=False) as env:
         c = env.connect()
-        c.add_match("type='signal',sender='org.lssd.LSS1',interface='org.freedesktop.DBus.ObjectManager'")
+        c.add_match(f"type='signal',sender='{SERVICE}',interface='org.freedesktop.DBus.ObjectManager'")
         env._start_lssd()
         env.wait_for_name()
         expect(B0 in env.call(ROOT, 'org.freedesktop.DBus.ObjectManager', 'GetManagedObjects')[0],

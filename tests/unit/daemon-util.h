@@ -7,6 +7,8 @@
 #include <systemd/sd-bus.h>
 #include <unistd.h>
 
+#include "names/lssd_names.h"
+
 /* An sd_bus on one end of a socketpair: enough to build and read messages. */
 static inline sd_bus *test_bus_new(void) {
         sd_bus *bus = NULL;
@@ -26,8 +28,8 @@ static inline void test_bus_free(sd_bus *bus) {
 /* A method call with `types`/args appended, sealed and rewound for reading. */
 #define test_message(bus, m, types, ...)                                                                         \
         do {                                                                                                     \
-                ck_assert_int_ge(sd_bus_message_new_method_call((bus), &(m), "org.lssd.LSS1",                    \
-                                                                "/org/lssd/LSS1/buses/can0", "org.lssd.LSS1.Bus", \
+                ck_assert_int_ge(sd_bus_message_new_method_call((bus), &(m), LSSD_BUS_NAME,                       \
+                                                                LSSD_BUSES_PATH "/can0", LSSD_BUS_IFACE,          \
                                                                 "Test"),                                         \
                                  0);                                                                             \
                 ck_assert_int_ge(sd_bus_message_append((m), (types), __VA_ARGS__), 0);                          \

@@ -45,6 +45,13 @@ static inline bool taken_in_table(void *userdata, uint8_t node_id, const lss_ide
         return ((const bool *) userdata)[node_id];
 }
 
+/* The failure's codes: which service failed and why (lss_result), the
+ * daemon's classification; never read from the message. */
+#define expect_failed_at(r, service, why) \
+        ck_assert_msg((r)->failed_service == (service) && (r)->reason == (why), \
+                      "failed at %s (%s), want %s (%s): %s", lss_service_name((r)->failed_service), \
+                      lss_reason_name((r)->reason), lss_service_name(service), lss_reason_name(why), (r)->message)
+
 static inline lss_master *master_default(void) {
         lss_timing_config c;
         lss_timing_config_default(&c);

@@ -79,6 +79,7 @@ START_TEST(assign_failures) {
         ck_assert_int_eq(lss_master_assign(m, &absent, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
         const lss_result *r = run(m, b);
         ck_assert_int_eq(r->status, LSS_E_NOT_FOUND);
+        expect_failed_at(r, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER);
         ck_assert(all_waiting(b));
         ck_assert_int_eq(lss_master_assign(m, &ID1, 0, 0, membus_now(b)), -EINVAL);
         ck_assert_int_eq(lss_master_assign(m, &ID1, 128, 0, membus_now(b)), -EINVAL);
@@ -93,6 +94,7 @@ START_TEST(assign_failures) {
         r = run(m, b);
         /* a device that cannot store keeps the volatile node-ID: not a failure */
         ck_assert_int_eq(r->status, LSS_OK);
+        expect_failed_at(r, LSS_SERVICE_NONE, LSS_REASON_NONE);
         ck_assert(r->not_stored);
         ck_assert_uint_eq(r->err, 1);
         ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 5);
@@ -108,6 +110,7 @@ START_TEST(assign_failures) {
         ck_assert_int_eq(r->status, LSS_E_REJECTED);
         ck_assert_uint_eq(r->err, 255);
         ck_assert_uint_eq(r->spec, 0x42);
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_REFUSED);
         ck_assert(all_waiting(b));
         ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 0xFF);
         membus_free(b);
@@ -118,6 +121,8 @@ START_TEST(assign_failures) {
         membus_add_slave(b, &ID1, 0xFF, &f);
         ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
         ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        /* the store failed, though the message does not start with "Store" */
+        expect_failed_at(lss_master_result(m), LSS_SERVICE_STORE, LSS_REASON_NO_ANSWER);
         ck_assert(all_waiting(b));
         membus_free(b);
 
@@ -127,6 +132,7 @@ START_TEST(assign_failures) {
         membus_add_slave(b, &ID1, 0xFF, &f);
         ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
         ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        expect_failed_at(lss_master_result(m), LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_NO_ANSWER);
         membus_free(b);
 
         lss_slave_faults_default(&f);
@@ -135,6 +141,7 @@ START_TEST(assign_failures) {
         membus_add_slave(b, &ID1, 0xFF, &f);
         ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE, membus_now(b)), 0);
         ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        expect_failed_at(lss_master_result(m), LSS_SERVICE_INQUIRE, LSS_REASON_NO_ANSWER);
         membus_free(b);
         lss_master_free(m);
 }
@@ -152,6 +159,7 @@ START_TEST(assign_duplicate_identity) {
         const lss_result *r = run(m, b);
         ck_assert_int_eq(r->status, LSS_E_CONFLICT);
         ck_assert_ptr_nonnull(strstr(r->message, "duplicate"));
+        expect_failed_at(r, LSS_SERVICE_VERIFY, LSS_REASON_SEVERAL_ANSWERS);
         lss_master_free(m);
         membus_free(b);
 }
@@ -176,6 +184,7 @@ START_TEST(assign_refuses_taken_node_id) {
         ck_assert_int_eq(r->status, LSS_E_CONFLICT);
         ck_assert(r->in_use);
         ck_assert_ptr_nonnull(strstr(r->message, "node-ID 6 already answers"));
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_IN_USE);
         ck_assert_uint_eq(c.configure, 0);
         ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 0xFF);
         ck_assert(all_waiting(b));
@@ -187,6 +196,7 @@ START_TEST(assign_refuses_taken_node_id) {
         ck_assert_int_eq(r->status, LSS_E_CONFLICT);
         ck_assert(r->in_use);
         ck_assert_ptr_nonnull(strstr(r->message, "node-ID 7 already answered"));
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_IN_USE);
         ck_assert_uint_eq(c.configure, 0);
 
         /* forced: the caller said so */
@@ -521,6 +531,7 @@ START_TEST(unassign_failures) {
         ck_assert_int_eq(lss_master_unassign(m, &absent, LSS_UNASSIGN_STORE, membus_now(b)), 0);
         const lss_result *r = run(m, b);
         ck_assert_int_eq(r->status, LSS_E_NOT_FOUND);
+        expect_failed_at(r, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER);
         ck_assert_uint_eq(membus_slave(b, 0)->st.pending_node_id, 9);
         ck_assert(all_waiting(b));
         ck_assert_int_eq(lss_master_unassign(m, &ID1, 1u << 7, membus_now(b)), -EINVAL);
@@ -534,6 +545,7 @@ START_TEST(unassign_failures) {
         ck_assert_int_eq(lss_master_unassign(m, &ID1, LSS_UNASSIGN_STORE | LSS_UNASSIGN_RESET, membus_now(b)), 0);
         r = run(m, b);
         ck_assert_int_eq(r->status, LSS_E_NO_RESPONSE);
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_NO_ANSWER);
         ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 9);
         ck_assert(all_waiting(b));
         membus_free(b);
@@ -566,6 +578,7 @@ START_TEST(unassign_failures) {
         ck_assert(!r->in_effect);
         ck_assert_uint_eq(r->node_id, 9);
         ck_assert_ptr_nonnull(strstr(r->message, "did not answer"));
+        expect_failed_at(r, LSS_SERVICE_VERIFY, LSS_REASON_NO_ANSWER);
         /* it gave up after the boot-up timeout, not at once and not much later */
         lss_timing_config tc;
         lss_timing_config_default(&tc);

@@ -196,6 +196,7 @@ START_TEST(refusal_activates_nothing) {
         ck_assert_int_eq(r->status, LSS_E_REJECTED);
         ck_assert_uint_eq(r->err, 1);
         ck_assert_ptr_nonnull(strstr(r->message, "00000012")); /* names the device (revision 0x12) */
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_BIT_TIMING, LSS_REASON_REFUSED);
         ck_assert_int_eq(devs[0].outcome, LSS_BITRATE_REVERTED);
         ck_assert_int_eq(devs[1].outcome, LSS_BITRATE_REVERTED);
         ck_assert_int_eq(devs[2].outcome, LSS_BITRATE_REFUSED);
@@ -237,6 +238,7 @@ START_TEST(silent_configure_is_refusal) {
         const lss_result *r = drive(m, b, &h);
         ck_assert_int_eq(r->status, LSS_E_REJECTED);
         ck_assert_ptr_nonnull(strstr(r->message, "did not answer Configure Bit Timing"));
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_BIT_TIMING, LSS_REASON_NO_ANSWER);
         ck_assert_int_eq(devs[0].outcome, LSS_BITRATE_REVERTED);
         ck_assert_int_eq(devs[1].outcome, LSS_BITRATE_SILENT);
         ck_assert_uint_eq(h.asked, 0);
@@ -265,6 +267,7 @@ START_TEST(missed_activation_is_partial) {
         const lss_result *r = drive(m, b, &h);
         ck_assert_int_eq(r->status, LSS_E_INCOMPLETE);
         ck_assert_ptr_nonnull(strstr(r->message, "partial switch"));
+        expect_failed_at(r, LSS_SERVICE_ACTIVATE_BIT_TIMING, LSS_REASON_NO_ANSWER);
         ck_assert_ptr_nonnull(strstr(r->message, "0000009a:00000003:00000011:00001001"));
         ck_assert_int_eq(devs[0].outcome, LSS_BITRATE_SWITCHED);
         ck_assert_int_eq(devs[1].outcome, LSS_BITRATE_LOST);
@@ -297,6 +300,7 @@ START_TEST(unreachable_changes_nothing) {
         const lss_result *r = drive(m, b, &h);
         ck_assert_int_eq(r->status, LSS_E_NOT_FOUND);
         ck_assert_ptr_nonnull(strstr(r->message, "00004242"));
+        expect_failed_at(r, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER);
         ck_assert_int_eq(devs[0].outcome, LSS_BITRATE_REACHED);
         ck_assert_int_eq(devs[2].outcome, LSS_BITRATE_UNREACHABLE);
         ck_assert_uint_eq(count_cs(tr, 0x7E5, LSS_CS_CONFIGURE_BIT_TIMING), 0);
@@ -384,6 +388,7 @@ START_TEST(store_refusal_reported) {
         ck_assert_int_eq(lss_master_set_bitrate(m, &p, membus_now(b)), 0);
         const lss_result *r = drive(m, b, &h);
         ck_assert_int_eq(r->status, LSS_E_REJECTED);
+        expect_failed_at(r, LSS_SERVICE_STORE, LSS_REASON_REFUSED);
         ck_assert_int_eq(devs[0].outcome, LSS_BITRATE_STORE_FAILED);
         ck_assert_uint_eq(devs[0].err, 1);
         ck_assert_int_eq(devs[1].outcome, LSS_BITRATE_STORED);

@@ -322,7 +322,7 @@ START_TEST(execute_limit) {
         size_t n = 0;
 
         for (unsigned count = LSSD_EXECUTE_STEPS_MAX; count <= LSSD_EXECUTE_STEPS_MAX + 1; count++) {
-                ck_assert_int_ge(sd_bus_message_new_method_call(bus, &m, "org.lssd.LSS1", "/x", "org.lssd.LSS1.Bus",
+                ck_assert_int_ge(sd_bus_message_new_method_call(bus, &m, LSSD_BUS_NAME, "/x", LSSD_BUS_IFACE,
                                                                 "Execute"),
                                  0);
                 ck_assert_int_ge(sd_bus_message_open_container(m, 'a', "(sv)"), 0);

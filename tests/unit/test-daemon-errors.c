@@ -78,30 +78,58 @@ START_TEST(rejected_message) {
         lss_result r = { .status = LSS_E_REJECTED, .err = 1, .spec = 0 };
         strcpy(r.message, "Configure Node-ID rejected by the slave: error 1, spec 0");
 
-        lssd_error_from_result(&e, &r, LSSD_SERVICE_CONFIGURE_NODE_ID, NULL);
+        lssd_error_from_result(&e, &r, LSS_SERVICE_CONFIGURE_NODE_ID, NULL);
         ck_assert_str_eq(e.name, LSSD_ERROR_REJECTED);
         ck_assert_str_eq(e.message,
                          "Configure Node-ID rejected by the slave: error 1 (node-ID out of range), spec 0");
         sd_bus_error_free(&e);
 
         r.err = 2;
-        lssd_error_from_result(&e, &r, LSSD_SERVICE_STORE, "steps[3] (StoreConfiguration): ");
+        lssd_error_from_result(&e, &r, LSS_SERVICE_STORE, "steps[3] (StoreConfiguration): ");
         ck_assert_str_eq(e.message, "steps[3] (StoreConfiguration): Store Configuration rejected by the slave: "
                                     "error 2 (storage media access error), spec 0");
         sd_bus_error_free(&e);
 
         r.err = 255;
         r.spec = 0x42;
-        lssd_error_from_result(&e, &r, LSSD_SERVICE_CONFIGURE_BIT_TIMING, NULL);
+        lssd_error_from_result(&e, &r, LSS_SERVICE_CONFIGURE_BIT_TIMING, NULL);
         ck_assert_str_eq(e.message,
                          "Configure Bit Timing rejected by the slave: error 255 (manufacturer-specific), spec 66");
         sd_bus_error_free(&e);
 
-        ck_assert_str_eq(lssd_lss_error_meaning(LSSD_SERVICE_CONFIGURE_BIT_TIMING, 1), "bit rate not supported");
-        ck_assert_str_eq(lssd_lss_error_meaning(LSSD_SERVICE_STORE, 1), "store not supported");
-        ck_assert_str_eq(lssd_lss_error_meaning(LSSD_SERVICE_CONFIGURE_NODE_ID, 7), "reserved");
-        ck_assert_str_eq(lssd_lss_error_meaning(_LSSD_SERVICE_MAX, 7), "reserved");
-        ck_assert_ptr_null(lssd_service_to_string(_LSSD_SERVICE_MAX));
+        ck_assert_str_eq(lssd_lss_error_meaning(LSS_SERVICE_CONFIGURE_BIT_TIMING, 1), "bit rate not supported");
+        ck_assert_str_eq(lssd_lss_error_meaning(LSS_SERVICE_STORE, 1), "store not supported");
+        ck_assert_str_eq(lssd_lss_error_meaning(LSS_SERVICE_CONFIGURE_NODE_ID, 7), "reserved");
+        ck_assert_str_eq(lssd_lss_error_meaning(LSS_SERVICE_NONE, 7), "reserved");
+}
+END_TEST
+
+/* Which service a rejection is about comes from the engine's code
+ * (lss_result.failed_service), never from its message: a store refusal
+ * gets the store meanings whatever the text says, and a service that
+ * answers without error codes keeps the engine's message. */
+START_TEST(rejected_by_code) {
+        sd_bus_error e = SD_BUS_ERROR_NULL;
+        lss_result r = { .status = LSS_E_REJECTED, .err = 2, .failed_service = LSS_SERVICE_STORE,
+                         .reason = LSS_REASON_REFUSED };
+        strcpy(r.message, "Configure Node-ID 5 went fine, then the slave refused");
+        lssd_error_from_result(&e, &r, r.failed_service, NULL);
+        ck_assert_str_eq(e.name, LSSD_ERROR_REJECTED);
+        ck_assert_str_eq(e.message, "Store Configuration rejected by the slave: error 2 (storage media access error), "
+                                    "spec 0");
+        sd_bus_error_free(&e);
+
+        r.failed_service = LSS_SERVICE_CONFIGURE_NODE_ID;
+        r.err = 1;
+        strcpy(r.message, "Store Configuration: anything");
+        lssd_error_from_result(&e, &r, r.failed_service, NULL);
+        ck_assert_str_eq(e.message, "Configure Node-ID rejected by the slave: error 1 (node-ID out of range), spec 0");
+        sd_bus_error_free(&e);
+
+        r.failed_service = LSS_SERVICE_SWITCH_SELECTIVE;
+        lssd_error_from_result(&e, &r, r.failed_service, NULL);
+        ck_assert_str_eq(e.message, "Store Configuration: anything");
+        sd_bus_error_free(&e);
 }
 END_TEST
 
@@ -109,7 +137,7 @@ START_TEST(other_results) {
         sd_bus_error e = SD_BUS_ERROR_NULL;
         lss_result r = { .status = LSS_E_NO_RESPONSE };
         strcpy(r.message, "no answer to Configure Node-ID 5");
-        int k = lssd_error_from_result(&e, &r, LSSD_SERVICE_CONFIGURE_NODE_ID, "Scan: ");
+        int k = lssd_error_from_result(&e, &r, LSS_SERVICE_CONFIGURE_NODE_ID, "Scan: ");
         ck_assert_int_lt(k, 0);
         ck_assert_str_eq(e.name, LSSD_ERROR_NO_RESPONSE);
         ck_assert_str_eq(e.message, "Scan: no answer to Configure Node-ID 5");
@@ -117,7 +145,7 @@ START_TEST(other_results) {
 
         /* no engine message: the short result word */
         r = (lss_result) { .status = LSS_E_CANCELLED };
-        lssd_error_from_result(&e, &r, _LSSD_SERVICE_MAX, NULL);
+        lssd_error_from_result(&e, &r, LSS_SERVICE_NONE, NULL);
         ck_assert_str_eq(e.name, LSSD_ERROR_CANCELLED);
         ck_assert_str_eq(e.message, "cancelled");
         sd_bus_error_free(&e);
@@ -125,7 +153,7 @@ START_TEST(other_results) {
         /* a rejection without a known service keeps the engine's text */
         r = (lss_result) { .status = LSS_E_REJECTED, .err = 1 };
         strcpy(r.message, "something rejected");
-        lssd_error_from_result(&e, &r, _LSSD_SERVICE_MAX, NULL);
+        lssd_error_from_result(&e, &r, LSS_SERVICE_NONE, NULL);
         ck_assert_str_eq(e.name, LSSD_ERROR_REJECTED);
         ck_assert_str_eq(e.message, "something rejected");
         sd_bus_error_free(&e);
@@ -139,6 +167,7 @@ static Suite *suite(void) {
         tcase_add_test(tc, map_round_trip);
         tcase_add_test(tc, status_names);
         tcase_add_test(tc, rejected_message);
+        tcase_add_test(tc, rejected_by_code);
         tcase_add_test(tc, other_results);
         suite_add_tcase(s, tc);
         return s;

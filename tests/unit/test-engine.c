@@ -99,6 +99,7 @@ START_TEST(error_codes) {
         ck_assert_uint_eq(r->err, 255);
         ck_assert_uint_eq(r->spec, 0x42);
         ck_assert_ptr_nonnull(strstr(r->message, "error 255"));
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_REFUSED);
         membus_free(b);
 
         lss_slave_faults_default(&f);
@@ -109,6 +110,7 @@ START_TEST(error_codes) {
         r = run(m, b);
         ck_assert_int_eq(r->status, LSS_E_REJECTED);
         ck_assert_uint_eq(r->err, 1);
+        expect_failed_at(r, LSS_SERVICE_STORE, LSS_REASON_REFUSED);
         membus_free(b);
 
         lss_slave_faults_default(&f);
@@ -119,6 +121,7 @@ START_TEST(error_codes) {
         r = run(m, b);
         ck_assert_int_eq(r->status, LSS_E_REJECTED);
         ck_assert_uint_eq(r->err, 2);
+        expect_failed_at(r, LSS_SERVICE_STORE, LSS_REASON_REFUSED);
         membus_free(b);
 
         lss_slave_faults_default(&f);
@@ -129,8 +132,11 @@ START_TEST(error_codes) {
         r = run(m, b);
         ck_assert_int_eq(r->status, LSS_E_REJECTED);
         ck_assert_uint_eq(r->err, 1);
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_BIT_TIMING, LSS_REASON_REFUSED);
         ck_assert_int_eq(lss_master_configure_bit_timing(m, 0, 2, membus_now(b)), 0);
-        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        expect_failed_at(r, LSS_SERVICE_NONE, LSS_REASON_NONE); /* a success carries no codes */
         ck_assert_int_eq(lss_master_configure_bit_timing(m, 1, 2, membus_now(b)), 0);
         ck_assert_int_eq(run(m, b)->status, LSS_E_REJECTED);
         ck_assert_int_eq(lss_master_activate_bit_timing(m, 16, membus_now(b)), 0);
@@ -145,9 +151,24 @@ START_TEST(error_codes) {
         b = one_slave(0xFF, &f);
         to_configuration(m, b);
         ck_assert_int_eq(lss_master_configure_bit_timing(m, 0, 2, membus_now(b)), 0);
-        ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_E_NO_RESPONSE);
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_BIT_TIMING, LSS_REASON_NO_ANSWER);
         membus_free(b);
         lss_master_free(m);
+}
+END_TEST
+
+/* Every failure code has a name (logs, test messages). */
+START_TEST(failure_code_names) {
+        for (int i = 0; i < _LSS_SERVICE_MAX; i++)
+                ck_assert_ptr_nonnull(lss_service_name((enum lss_service) i));
+        for (int i = 0; i < _LSS_REASON_MAX; i++)
+                ck_assert_ptr_nonnull(lss_reason_name((enum lss_reason) i));
+        ck_assert_ptr_null(lss_service_name(_LSS_SERVICE_MAX));
+        ck_assert_ptr_null(lss_reason_name(_LSS_REASON_MAX));
+        ck_assert_str_eq(lss_service_name(LSS_SERVICE_STORE), "Store Configuration");
+        ck_assert_str_eq(lss_reason_name(LSS_REASON_REFUSED), "refused");
 }
 END_TEST
 
@@ -158,6 +179,7 @@ START_TEST(no_answer_is_never_success) {
         ck_assert_int_eq(lss_master_configure_node_id(m, 3, membus_now(b)), 0);
         const lss_result *r = run(m, b);
         ck_assert_int_eq(r->status, LSS_E_NO_RESPONSE);
+        expect_failed_at(r, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_NO_ANSWER);
         ck_assert_uint_eq(membus_slave(b, 0)->st.pending_node_id, 0xFF);
         membus_free(b);
 
@@ -176,6 +198,7 @@ START_TEST(no_answer_is_never_success) {
         to_configuration(m, b);
         ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
         ck_assert_int_eq(run(m, b)->status, LSS_E_NO_RESPONSE);
+        expect_failed_at(lss_master_result(m), LSS_SERVICE_INQUIRE, LSS_REASON_NO_ANSWER);
         ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_SERIAL, membus_now(b)), 0);
         ck_assert_int_eq(run(m, b)->status, LSS_OK);
         membus_free(b);
@@ -594,6 +617,7 @@ int main(void) {
         tcase_add_test(tc, inquire_every_field);
         tcase_add_test(tc, selective_switch_hit_and_miss);
         tcase_add_test(tc, error_codes);
+        tcase_add_test(tc, failure_code_names);
         tcase_add_test(tc, no_answer_is_never_success);
         tcase_add_test(tc, two_in_configuration_conflict);
         tcase_add_test(tc, duplicate_answers_count_once);

@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lss/lss_autoassign.h"
 #include "lss/lss_proto.h"
 
 static void expect_bytes(const lss_frame *f, uint32_t id, const uint8_t *b, unsigned len) {
@@ -115,6 +116,44 @@ START_TEST(helpers) {
 }
 END_TEST
 
+/* The map-matching rule (lss_identity_matches, its one home): vendor,
+ * product and serial always count; the revision only when the entry has
+ * one. The autoassign map, the config lookup and the daemon all use it. */
+START_TEST(map_matching_rule) {
+        const lss_identity entry = { .vendor = 0xEC, .product = 0x1234, .revision = 0x10002, .serial = 0x80002468 };
+        lss_identity id = entry;
+
+        ck_assert(lss_identity_matches(&entry, true, &id));
+        ck_assert(lss_identity_matches(&entry, false, &id));
+        /* another revision: only an entry without revision names it */
+        id.revision = 0x20001;
+        ck_assert(!lss_identity_matches(&entry, true, &id));
+        ck_assert(lss_identity_matches(&entry, false, &id));
+        /* an entry without revision keeps whatever revision field it has: 0 matches any too */
+        const lss_identity zero_rev = { .vendor = 0xEC, .product = 0x1234, .revision = 0, .serial = 0x80002468 };
+        ck_assert(lss_identity_matches(&zero_rev, false, &id));
+        ck_assert(!lss_identity_matches(&zero_rev, true, &id));
+        /* vendor, product, serial: each one that differs is another device, revision or not */
+        for (unsigned f = 0; f < LSS_FIELD_COUNT; f++) {
+                if (f == LSS_FIELD_REVISION)
+                        continue;
+                id = entry;
+                lss_identity_set_field(&id, f, lss_identity_field(&entry, f) + 1);
+                ck_assert_msg(!lss_identity_matches(&entry, true, &id), "field %u", f);
+                ck_assert_msg(!lss_identity_matches(&entry, false, &id), "field %u", f);
+        }
+        /* the autoassign map's entries follow the same rule */
+        lss_map_entry e = { .id = entry, .revision_known = false, .node_id = 5 };
+        id = entry;
+        id.revision = 7;
+        ck_assert(lss_map_entry_matches(&e, &id));
+        e.revision_known = true;
+        ck_assert(!lss_map_entry_matches(&e, &id));
+        id.revision = entry.revision;
+        ck_assert(lss_map_entry_matches(&e, &id));
+}
+END_TEST
+
 /* Bit counts of known frames (stuffing computed on the real bit stream). */
 START_TEST(frame_bits) {
         lss_frame f;
@@ -143,6 +182,7 @@ int main(void) {
         tcase_add_test(tc, encoders);
         tcase_add_test(tc, response_acceptance);
         tcase_add_test(tc, helpers);
+        tcase_add_test(tc, map_matching_rule);
         tcase_add_test(tc, frame_bits);
         suite_add_tcase(s, tc);
         SRunner *sr = srunner_create(s);
