@@ -103,6 +103,8 @@ const lssd_bus_config *lssd_config_find_bus(const lssd_config *c, const char *if
 /* The entry for a device: same vendor, product and serial, and the same
  * revision unless the entry has none. A valid config has at most one. */
 const lssd_device_config *lssd_config_lookup_device(const lssd_bus_config *b, const lss_identity *id);
+/* one map entry against an identity: lss_identity_matches() on the entry */
+bool lssd_device_config_matches(const lssd_device_config *d, const lss_identity *id);
 
 /* The entry mapped to node_id, NULL if none. */
 const lssd_device_config *lssd_bus_config_find_node_id(const lssd_bus_config *b, uint8_t node_id);

@@ -51,13 +51,9 @@ static bool state_equal(const lss_slave_state *a, const lss_slave_state *b) {
 static uint64_t tx_delay(lss_slave *s) {
         uint64_t d = s->faults.latency_us;
         if (s->faults.jitter_us > 0)
-<<<<<<< HEAD
-                d += next_random(&s->rng) % ((uint64_t) s->faults.jitter_us + 1);
-        if (s->faults.spike_ppm > 0 && next_random(&s->rng) % 1000000 < s->faults.spike_ppm)
-                d += s->faults.spike_us;
-=======
                 d += sim_random_next(&s->rng) % ((uint64_t) s->faults.jitter_us + 1);
->>>>>>> layers
+        if (s->faults.spike_ppm > 0 && sim_random_next(&s->rng) % 1000000 < s->faults.spike_ppm)
+                d += s->faults.spike_us;
         uint64_t at = s->now_us + d;
         if (at < s->tx_ready_us)
                 at = s->tx_ready_us;
