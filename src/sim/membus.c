@@ -225,6 +225,7 @@ size_t membus_add_slave(membus *b, const lss_identity *id, uint8_t node_id, cons
         lss_slave_init(&n->s, id, node_id, b->bus_index, faults, slave_seed(b->seed, n->index), slave_emit, n);
         /* power-on is the caller's choice, but the slave lives on bus time */
         n->s.now_us = n->s.tx_ready_us = b->now_ns / 1000;
+        lss_slave_set_heartbeat(&n->s, n->s.faults.heartbeat_ms);
         n->deadline_us = lss_slave_deadline(&n->s);
         b->slaves[b->n_slaves++] = n;
         b->deadline_dirty = true;
