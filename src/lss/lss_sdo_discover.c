@@ -277,11 +277,18 @@ static void fill_window(lss_master *m, lss_sdo_state *s) {
         }
 }
 
-static uint64_t next_deadline(const lss_sdo_state *s) {
+/* A request that found the transmit queue full is tried again soon. */
+#define QUEUE_FULL_RETRY_US 1000u
+
+static uint64_t next_deadline(const lss_sdo_state *s, uint64_t now) {
         uint64_t d = NO_TIME;
-        for (unsigned n = s->first; n <= s->last; n++)
-                if (s->slot[n].state == SLOT_BUSY && s->slot[n].deadline < d)
-                        d = s->slot[n].deadline;
+        for (unsigned n = s->first; n <= s->last; n++) {
+                const sdo_slot *sl = &s->slot[n];
+                uint64_t t = sl->state == SLOT_BUSY ? sl->deadline :
+                        sl->state == SLOT_WANT ? now + QUEUE_FULL_RETRY_US : NO_TIME;
+                if (t < d)
+                        d = t;
+        }
         return d;
 }
 
@@ -324,7 +331,7 @@ static int proc_sdo_discover(lss_master *m) {
                 /* asking: until every node-ID of the range is done */
                 while (s->done < s->total) {
                         fill_window(m, s);
-                        step_event(m, next_deadline(s));
+                        step_event(m, next_deadline(s, m->now));
                         PT_YIELD(&s->pc);
                         note_written(m, s);
                         /* frames the transport lost (a void step) cost a retry, nothing else */
