@@ -5,8 +5,11 @@
  *   (a) blind fastscan, (b) vendor and product known, (c) full identity known,
  * and (d) the blind Scan: one enumeration of every slave (one vendor and
  * product, revision and serial random: the lss-sim set-up of bench/run).
- * Not a test: prints a table. Correctness is still checked: every slave must
- * end with the node-ID it was reported with, or the bench fails. */
+ * And the SDO identity discovery of node-IDs 1..127 with N configured devices
+ * at 1..N, against the bus floor of its frames.
+ * Not a test: prints tables. Correctness is still checked: every slave must
+ * end with the node-ID it was reported with, every configured device must be
+ * found with its identity, or the bench fails. */
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -82,6 +85,53 @@ static int run_case(enum mode mode, size_t n, uint64_t seed, row *out) {
         return bad;
 }
 
+/* bits of the SDO requests on the wire (0x601..0x67F: only the master sends them) */
+static void count_request_bits(void *ud, const lss_frame *f, uint64_t t_us) {
+        (void) t_us;
+        if (f->id >= 0x601 && f->id <= 0x67F)
+                *(uint64_t *) ud += can_frame_bits(f);
+}
+
+/* SDO discovery of 1..127 with n devices at 1..n; the master's frames leave
+ * in order (a SocketCAN socket). */
+static int run_sdo(size_t n, uint64_t seed) {
+        membus *b = membus_new(BITRATE);
+        membus_set_master_fifo(b, true);
+        uint64_t request_bits = 0;
+        membus_set_trace(b, count_request_bits, &request_bits);
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.latency_us = LATENCY_US;
+        f.jitter_us = JITTER_US;
+        for (size_t i = 0; i < n; i++) {
+                lss_identity id = { (uint32_t) rnd(&seed), (uint32_t) rnd(&seed), (uint32_t) rnd(&seed),
+                                    (uint32_t) rnd(&seed) };
+                membus_add_slave(b, &id, (uint8_t) (i + 1), &f);
+        }
+        lss_master *m = lss_master_new(NULL);
+        lss_sdo_discover_params p = { .first = 1, .last = 127 };
+        lss_master_sdo_discover(m, &p, membus_now(b));
+        const lss_result *r = lss_drive(m, b, 3600ull * 1000000, NULL, NULL);
+        int bad = r->status != LSS_OK || r->n_sdo_nodes != n;
+        for (size_t i = 0; !bad && i < n; i++) {
+                const lss_sdo_node *d = &r->sdo_nodes[i];
+                bad = d->node_id != i + 1 || d->known != 0xF || d->conflict ||
+                      !lss_identity_equal(&d->id, &membus_slave(b, i)->id);
+        }
+        if (bad)
+                fprintf(stderr, "SDO discovery with %zu devices: wrong result (%s)\n", n, r->message);
+        const membus_stats *st = membus_get_stats(b);
+        double req_floor_us = (double) request_bits * 1e6 / BITRATE;
+        /* lss_drive ends with 2 ms of idle bus */
+        double elapsed_ms = (membus_now(b) - 2000) / 1000.0;
+        printf("%-26s %4zu %10llu %10llu %12.1f %12.1f %12.1f %9.2fx\n", "SDO 1018h of 1..127", n,
+               (unsigned long long) st->master_frames, (unsigned long long) st->frames, req_floor_us / 1000,
+               st->busy_us / 1000.0, elapsed_ms, elapsed_ms * 1000 / st->busy_us);
+        lss_master_free(m);
+        membus_free(b);
+        return bad;
+}
+
 static double frame_us(const lss_frame *f) {
         return can_frame_bits(f) * 1e6 / BITRATE;
 }
@@ -121,6 +171,16 @@ int main(void) {
                 }
         printf("# vs floor: (c) LSS frames / 10 per node (target <= 1.5x); (a),(b),(d) elapsed per node / fastscan "
                "floor (target for (a) <= 2x)\n");
+
+        printf("\n# SDO identity discovery (window %u), node-IDs 1..127, N devices at 1..N, same latency\n",
+               LSS_SDO_WINDOW_DEFAULT);
+        printf("%-26s %4s %10s %10s %12s %12s %12s %10s\n", "case", "N", "requests", "frames", "req floor ms",
+               "bus time ms", "elapsed ms", "vs bus");
+        const size_t sdo_ns[] = { 0, 8, 32, 127 };
+        for (size_t i = 0; i < sizeof(sdo_ns) / sizeof(sdo_ns[0]); i++)
+                bad |= run_sdo(sdo_ns[i], 2000 + sdo_ns[i]);
+        printf("# req floor: bus time of the requests sent; bus time: of all frames (requests and answers); "
+               "vs bus: elapsed / bus time\n");
         if (bad)
                 printf("FAILED: mis-assignments or failures (see stderr)\n");
         return bad;

@@ -348,6 +348,11 @@ static void help(FILE *out) {
                 "  --fault KNOB[=VALUE][@SERIAL]\n"
                 "                             a slave-model fault, for every slave or the one\n"
                 "                             with that serial; applied in command line order\n"
+                "  --heartbeat MS             heartbeat producer time (object 1017h) of every\n"
+                "                             slave; 0 = no heartbeat (default)\n"
+                "  --nmt-state STATE          NMT state of the slaves after their boot-up at\n"
+                "                             start: pre-operational (default), operational or\n"
+                "                             stopped (no SDO answers); NMT commands change it\n"
                 "  --state DIR                keep each slave's state in DIR/<serial>.state\n"
                 "  -v --verbose               log every frame received and sent to stderr\n"
                 "  -h --help, --version\n\n"
@@ -398,6 +403,8 @@ enum {
         ARG_BITRATE,
         ARG_FAULT,
         ARG_NO_FOLLOW,
+        ARG_HEARTBEAT,
+        ARG_NMT_STATE,
 };
 
 int sim_options_parse(sim_options *o, int argc, char **argv, FILE *out, FILE *err) {
@@ -415,6 +422,8 @@ int sim_options_parse(sim_options *o, int argc, char **argv, FILE *out, FILE *er
                 { "bitrate", required_argument, NULL, ARG_BITRATE },
                 { "fault", required_argument, NULL, ARG_FAULT },
                 { "no-follow-bitrate", no_argument, NULL, ARG_NO_FOLLOW },
+                { "heartbeat", required_argument, NULL, ARG_HEARTBEAT },
+                { "nmt-state", required_argument, NULL, ARG_NMT_STATE },
                 {}
         };
         const char *what;
@@ -426,6 +435,7 @@ int sim_options_parse(sim_options *o, int argc, char **argv, FILE *out, FILE *er
                 .profile = sim_profile_default(),
                 .bitrate = SIM_DEFAULT_BITRATE,
                 .follow_bitrate = true,
+                .nmt_state = SLAVE_NMT_PRE_OPERATIONAL,
         };
 
         /* 0 re-initialises getopt, so the tests can parse several times */
@@ -500,6 +510,22 @@ int sim_options_parse(sim_options *o, int argc, char **argv, FILE *out, FILE *er
                 }
                 case ARG_NO_FOLLOW:
                         o->follow_bitrate = false;
+                        break;
+                case ARG_HEARTBEAT:
+                        if (sim_parse_u32(optarg, &v) < 0 || v > UINT16_MAX)
+                                return fail(err, "--heartbeat '%s': %s", optarg, "need milliseconds 0..65535 (0: off)");
+                        o->heartbeat_ms = (uint16_t) v;
+                        break;
+                case ARG_NMT_STATE:
+                        if (strcmp(optarg, "pre-operational") == 0)
+                                o->nmt_state = SLAVE_NMT_PRE_OPERATIONAL;
+                        else if (strcmp(optarg, "operational") == 0)
+                                o->nmt_state = SLAVE_NMT_OPERATIONAL;
+                        else if (strcmp(optarg, "stopped") == 0)
+                                o->nmt_state = SLAVE_NMT_STOPPED;
+                        else
+                                return fail(err, "--nmt-state '%s': %s", optarg,
+                                            "need pre-operational, operational or stopped");
                         break;
                 case ':':
                         return fail(err, "%s: %s", argv[optind - 1], "needs an argument");

@@ -65,6 +65,8 @@ typedef struct sim_options {
         sim_fault_spec *faults;
         size_t n_faults;
         bool follow_bitrate;      /* the simulated bus follows an activated bit rate */
+        uint16_t heartbeat_ms;    /* heartbeat producer time, 0 = off */
+        enum lss_slave_nmt nmt_state; /* after the boot-up at start */
         bool verbose;
 } sim_options;
 

@@ -179,6 +179,7 @@ int sim_new(sim **ret, const sim_options *o, uint64_t now_us, FILE *err) {
                         faults.latency_us = o->latency_us;
                 if (o->jitter_given)
                         faults.jitter_us = o->jitter_us;
+                faults.heartbeat_ms = o->heartbeat_ms;
                 for (size_t k = 0; k < o->n_faults; k++)
                         if (!o->faults[k].has_serial || o->faults[k].serial == id.serial)
                                 sim_fault_apply(&o->faults[k], &faults);
@@ -207,8 +208,11 @@ int sim_new(sim **ret, const sim_options *o, uint64_t now_us, FILE *err) {
                 }
         }
 
-        for (size_t i = 0; i < s->n_slaves; i++)
+        for (size_t i = 0; i < s->n_slaves; i++) {
                 lss_slave_power_on(&s->slaves[i].s, now_us);
+                /* as if a master had set it before lss-sim started */
+                s->slaves[i].s.st.nmt = o->nmt_state;
+        }
         if (s->error < 0) {
                 r = s->error;
                 goto fail;

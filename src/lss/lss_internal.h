@@ -24,6 +24,8 @@ enum step_kind {
         STEP_BOOTUP, /* wait for the boot-up of a node (optionally after sending tx) */
         STEP_DELAY,  /* send tx (if any) and stay silent for wait_us */
         STEP_SDO,    /* SDO upload request to node bootup_node: does anyone answer? */
+        STEP_EVENT,  /* wait for the next frame or until wait_us: the procedure
+                      * judges the frame itself (step.answer, first_at) */
 };
 
 enum step_phase { PHASE_IDLE, PHASE_WAIT, PHASE_ANSWER_GUARD, PHASE_LATE_GUARD, PHASE_DONE };
@@ -156,6 +158,7 @@ struct lss_master {
         lss_assign_state as;
         lss_scan_state sc;
         struct lss_aa_state *aa;
+        struct lss_sdo_state *sdo;
         lss_bitrate_state br;
 
         lss_frame txq[16];
@@ -183,6 +186,10 @@ struct lss_master {
 void step_lss(lss_master *m, int expect_cs);
 void step_add_tx(lss_master *m, const lss_frame *f);
 void step_start(lss_master *m);
+/* Queue a frame for the transport; false when the queue is full. */
+bool step_queue_tx(lss_master *m, const lss_frame *f);
+/* Wait for the next frame (step_answered) or until `until` (a STEP_EVENT). */
+void step_event(lss_master *m, uint64_t until);
 /* The echo of the step's last request came back at `at` (tx confirmation). */
 void step_on_tx_confirmed(lss_master *m, uint64_t at);
 /* Switch state selective (4 frames), waiting for 0x44. */
@@ -253,4 +260,5 @@ int proc_confirm_found(lss_master *m, lss_scan_state *s);
 int cand_add(lss_scan_state *s, const lss_identity *id);
 int proc_slowscan(lss_master *m, lss_scan_state *s);
 void lss_autoassign_free_state(lss_master *m);
+void lss_sdo_discover_free_state(lss_master *m);
 int master_start_procedure(lss_master *m, lss_proc_fn proc, uint64_t now);

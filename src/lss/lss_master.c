@@ -75,6 +75,7 @@ void lss_master_free(lss_master *m) {
         free(m->sc.stack);
         free(m->sc.cand);
         lss_autoassign_free_state(m);
+        lss_sdo_discover_free_state(m);
         free(m);
 }
 
@@ -176,10 +177,7 @@ int master_add_device(lss_master *m, const lss_identity *id, uint8_t node_id) {
 static void queue_switch_waiting(lss_master *m) {
         lss_frame f;
         lss_encode_switch_global(&f, LSS_MODE_WAITING);
-        if (m->txq_len < 16) {
-                m->txq[(m->txq_head + m->txq_len) % 16] = f;
-                m->txq_len++;
-        }
+        (void) step_queue_tx(m, &f);
 }
 
 static void finish(lss_master *m) {

@@ -115,6 +115,27 @@ typedef struct lss_device {
         uint8_t aside_node_id;
 } lss_device;
 
+/* A node-ID the SDO identity discovery got an answer from or heard
+ * (lss_master_sdo_discover). */
+enum lss_sdo_source {
+        LSS_SDO_FROM_SDO = 1u << 0,   /* answered an upload of 1018h (a value or an abort) */
+        LSS_SDO_FROM_HEARD = 1u << 1, /* a boot-up, heartbeat or an SDO answer to another client */
+};
+
+typedef struct lss_sdo_node {
+        uint8_t node_id;
+        uint8_t known;        /* bit LSS_FIELD_x: field x read from 1018h sub-index x + 1 (id) */
+        uint8_t aborted;      /* bit LSS_FIELD_x: its upload was aborted (abort_code: the first abort) */
+        uint8_t source;       /* LSS_SDO_FROM_* */
+        /* two different answers to one request: more than one device has
+         * this node-ID; `known` keeps only the fields all answers agree on */
+        bool conflict;
+        uint8_t nmt_state;    /* last boot-up (0x00) or heartbeat state heard (0x04 stopped,
+                               * 0x05 operational, 0x7F pre-operational); 0xFF: none */
+        uint32_t abort_code;
+        lss_identity id;
+} lss_sdo_node;
+
 typedef struct lss_result {
         enum lss_status status;
         uint8_t err, spec;   /* LSS_E_REJECTED: the slave's error and manufacturer code */
@@ -134,6 +155,10 @@ typedef struct lss_result {
         /* a failure: which service, why (codes; the message says it for people) */
         enum lss_service failed_service;
         enum lss_reason reason;
+        /* SDO identity discovery: every node-ID that answered or was heard,
+         * ascending (owned by the engine until the next start) */
+        lss_sdo_node *sdo_nodes;
+        size_t n_sdo_nodes;
         char message[160];   /* human-readable detail for errors */
 } lss_result;
 
@@ -269,6 +294,26 @@ enum lss_unassign_flags {
  * succeeded; result.not_stored: the slave cannot store (error 1 or 2 in err:
  * it gets its old node-ID back at the next power cycle; not a failure). */
 int lss_master_unassign(lss_master *m, const lss_identity *id, unsigned flags, uint64_t now);
+
+/* ---- SDO identity discovery (lss_sdo_discover.c) ---- */
+
+#define LSS_SDO_WINDOW_DEFAULT 8u
+#define LSS_SDO_WINDOW_MAX 16u
+typedef struct lss_sdo_discover_params {
+        uint8_t first, last;  /* node-IDs to ask, 1..127, first <= last */
+        unsigned window;      /* node-IDs asked at once, 1..LSS_SDO_WINDOW_MAX; 0: the default */
+} lss_sdo_discover_params;
+/* Learns the identity of every device at a node-ID in [first, last] by
+ * expedited SDO upload of 1018h sub-indexes 1..4 (vendor, product,
+ * revision, serial), up to `window` node-IDs in flight at once (one request
+ * per node-ID: an SDO server serves one transfer at a time); a silent
+ * request is sent once more. Boot-ups, heartbeats and SDO answers to other
+ * clients heard meanwhile are recorded too, at any node-ID. Writes no
+ * object, sends no NMT command: a device in NMT Stopped is not found (unless
+ * its heartbeat is heard). result.sdo_nodes lists what answered or was
+ * heard; status LSS_OK but for a bad argument, out of memory or cancel.
+ * The rules are in docs/engine.md. */
+int lss_master_sdo_discover(lss_master *m, const lss_sdo_discover_params *p, uint64_t now);
 
 /* ---- changing the bit rate of the whole network (lss_bitrate.c) ---- */
 

@@ -39,14 +39,28 @@ void step_node_in_use(lss_master *m, uint8_t node_id) {
         step_start(m);
 }
 
+bool step_queue_tx(lss_master *m, const lss_frame *f) {
+        if (m->txq_len >= sizeof(m->txq) / sizeof(m->txq[0]))
+                return false;
+        m->txq[(m->txq_head + m->txq_len) % 16] = *f;
+        m->txq_len++;
+        return true;
+}
+
+void step_event(lss_master *m, uint64_t until) {
+        m->step = (lss_step) {
+                .kind = STEP_EVENT,
+                .sent_at = m->now,
+                .wait_us = until <= m->now ? 0 : until - m->now > UINT32_MAX ? UINT32_MAX : (uint32_t) (until - m->now),
+                .phase = PHASE_WAIT,
+        };
+}
+
 void step_start(lss_master *m) {
         lss_step *s = &m->step;
 
         for (unsigned i = 0; i < s->n_tx; i++)
-                if (m->txq_len < sizeof(m->txq) / sizeof(m->txq[0])) {
-                        m->txq[(m->txq_head + m->txq_len) % 16] = s->tx[i];
-                        m->txq_len++;
-                }
+                (void) step_queue_tx(m, &s->tx[i]);
         /* everything still queued goes on the wire ahead of the answer
          * (e.g. an unconfirmed switch sent just before) */
         for (unsigned i = 0; i < m->txq_len; i++)
@@ -102,6 +116,13 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
         if (s->phase != PHASE_WAIT && s->phase != PHASE_ANSWER_GUARD && s->phase != PHASE_LATE_GUARD) {
                 m->stats.ignored_frames++;
                 step_on_stray(m, f);
+                return;
+        }
+        if (s->kind == STEP_EVENT) {
+                s->answer = *f;
+                s->first_at = rx;
+                s->n_answers = 1;
+                s->phase = PHASE_DONE;
                 return;
         }
         /* A slave answers only after the whole request is on the wire: anything

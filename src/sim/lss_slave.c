@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
-/* The CiA 305 LSS slave model (plus the NMT commands it needs). Sans-I/O:
+/* The CiA 305 LSS slave model (plus the CiA 301 a master meets: NMT states,
+ * boot-up, heartbeat, an SDO server for 1000h, 1017h and 1018h). Sans-I/O:
  * frames and time come in, answers go out through the emit callback. */
 #include "sim/lss_slave.h"
 #include "sim/sim_random.h"
@@ -33,6 +34,12 @@ void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8
         s->rng = seed;
         s->emit = emit;
         s->userdata = userdata;
+        lss_slave_set_heartbeat(s, s->faults.heartbeat_ms);
+}
+
+void lss_slave_set_heartbeat(lss_slave *s, uint16_t period_ms) {
+        s->faults.heartbeat_ms = period_ms;
+        s->heartbeat_at_us = period_ms ? s->now_us + (uint64_t) period_ms * 1000 : NO_DEADLINE;
 }
 
 static bool state_equal(const lss_slave_state *a, const lss_slave_state *b) {
@@ -61,14 +68,19 @@ static uint64_t tx_delay(lss_slave *s) {
         return at - s->now_us;
 }
 
+/* tx_loss_ppm: the frame never leaves the slave */
+static bool tx_lost(lss_slave *s) {
+        return s->faults.tx_loss_ppm > 0 && next_random(&s->rng) % 1000000 < s->faults.tx_loss_ppm;
+}
+
 static void send_frame(lss_slave *s, const lss_frame *f) {
-        if (s->emit)
+        if (s->emit && !tx_lost(s))
                 s->emit(s->userdata, f, tx_delay(s));
 }
 
 /* An LSS answer, subject to the answer faults (boot-ups are not). */
 static void answer(lss_slave *s, const lss_frame *f) {
-        if (s->faults.silent || !s->emit)
+        if (s->faults.silent || !s->emit || tx_lost(s))
                 return;
         lss_frame a = *f;
         if (s->faults.wrong_dlc)
@@ -98,12 +110,40 @@ static bool in_window(const lss_slave *s, uint64_t now_us) {
         return now_us >= s->activate_at_us && now_us < s->silent_until_us;
 }
 
-/* The switch of Activate Bit Timing, once its first delay has passed. */
+/* NMT state as heartbeats carry it (CiA 301) */
+static uint8_t nmt_state_byte(enum lss_slave_nmt nmt) {
+        switch (nmt) {
+        case SLAVE_NMT_OPERATIONAL: return 0x05;
+        case SLAVE_NMT_STOPPED: return 0x04;
+        default: return 0x7F;
+        }
+}
+
+/* The heartbeat producer: 0x700 + node-ID, the NMT state, every period
+ * (also in Stopped; not without a node-ID, nor while retuning). One that
+ * is overdue goes out once, the next one a period later. */
+static void heartbeat(lss_slave *s) {
+        if (s->heartbeat_at_us == NO_DEADLINE || s->now_us < s->heartbeat_at_us)
+                return;
+        uint64_t period = (uint64_t) s->faults.heartbeat_ms * 1000;
+        s->heartbeat_at_us += period;
+        if (s->heartbeat_at_us <= s->now_us)
+                s->heartbeat_at_us = s->now_us + period;
+        if (!lss_node_id_valid(s->st.active_node_id) || in_window(s, s->now_us))
+                return;
+        lss_frame f = { .id = BOOTUP_COB_BASE + s->st.active_node_id, .len = 1,
+                        .data = { nmt_state_byte(s->st.nmt) } };
+        send_frame(s, &f);
+}
+
+/* The switch of Activate Bit Timing, once its first delay has passed; the
+ * heartbeat when it is due. */
 static void process_time(lss_slave *s) {
         if (s->switch_at_us != NO_DEADLINE && s->now_us >= s->switch_at_us) {
                 s->st.bit_index = s->st.pending_bit_index;
                 s->switch_at_us = NO_DEADLINE;
         }
+        heartbeat(s);
 }
 
 static void reset_protocol_progress(lss_slave *s) {
@@ -125,6 +165,8 @@ static void reset_communication(lss_slave *s) {
                 bootup_encode(&f, s->st.active_node_id);
                 send_frame(s, &f);
         }
+        /* the heartbeat starts over after the boot-up */
+        lss_slave_set_heartbeat(s, s->faults.heartbeat_ms);
 }
 
 /* Power-on and NMT Reset Node: everything comes back from storage. */
@@ -416,22 +458,70 @@ void lss_slave_power_on(lss_slave *s, uint64_t now_us) {
         note_change(s, &before);
 }
 
-/* The bit of an SDO server every CANopen device has: an expedited upload of
- * object 0x1000 (device type) answers; anything else is aborted. The master
- * uses it to learn whether a node-ID is taken. No SDO in NMT Stopped. */
+/* The SDO server every CANopen device has (CiA 301), as far as a master
+ * meets it: expedited upload of 1000h (device type), 1017h (heartbeat
+ * producer time) and 1018h (identity, sub 0..4, from the LSS address).
+ * Everything else is aborted: an object that does not exist, a sub-index
+ * that does not exist, a download (the objects are read-only here: lssd
+ * never writes), any other command. No SDO in NMT Stopped. */
+#define SDO_ABORT_CS 0x05040001u        /* command specifier not valid */
+#define SDO_ABORT_READ_ONLY 0x06010002u /* attempt to write a read-only object */
+#define SDO_ABORT_NO_OBJECT 0x06020000u /* object does not exist */
+#define SDO_ABORT_NO_SUB 0x06090011u    /* sub-index does not exist */
+#define SDO_CCS_DOWNLOAD 1u
+#define SDO_CCS_UPLOAD 2u
+#define SDO_CCS_ABORT 4u
+
+/* 0 and the value and its size, or the abort code */
+static uint32_t sdo_read(const lss_slave *s, uint16_t index, uint8_t sub, uint32_t *value, unsigned *size) {
+        switch (index) {
+        case 0x1000:
+                *value = 0x00000192u; /* device profile 402 */
+                *size = 4;
+                return sub == 0 ? 0 : SDO_ABORT_NO_SUB;
+        case 0x1017:
+                *value = s->faults.heartbeat_ms;
+                *size = 2;
+                return sub == 0 ? 0 : SDO_ABORT_NO_SUB;
+        case 0x1018:
+                if (sub > LSS_FIELD_COUNT)
+                        return SDO_ABORT_NO_SUB;
+                *value = sub == 0 ? LSS_FIELD_COUNT : lss_identity_field(&s->id, sub - 1);
+                *size = sub == 0 ? 1 : 4;
+                return 0;
+        default:
+                return SDO_ABORT_NO_OBJECT;
+        }
+}
+
 static void sdo_request(lss_slave *s, const lss_frame *f) {
         if (s->st.nmt == SLAVE_NMT_STOPPED || !s->emit)
                 return;
+        unsigned ccs = f->data[0] >> 5;
+        if (ccs == SDO_CCS_ABORT)
+                return; /* the client ends a transfer: nothing to answer */
+        uint16_t index = lss_get_u16(f->data + 1);
+        uint8_t sub = f->data[3];
+        uint32_t value = 0, code;
+        unsigned size = 0;
         lss_frame a = { .id = 0x580u + s->st.active_node_id, .len = 8 };
         memcpy(a.data + 1, f->data + 1, 3); /* index, sub-index */
-        if (f->data[0] == 0x40 && f->data[1] == 0x00 && f->data[2] == 0x10 && f->data[3] == 0x00) {
-                a.data[0] = 0x43;
-                lss_put_u32(a.data + 4, 0x00000192u); /* device profile 402 */
+        if (ccs == SDO_CCS_UPLOAD)
+                code = sdo_read(s, index, sub, &value, &size);
+        else if (ccs == SDO_CCS_DOWNLOAD)
+                code = sdo_read(s, index, sub, &value, &size) ?: SDO_ABORT_READ_ONLY;
+        else
+                code = SDO_ABORT_CS;
+        if (code == 0) {
+                /* expedited, size indicated: 0x43, 0x47, 0x4B, 0x4F for 4..1 bytes */
+                a.data[0] = (uint8_t) (0x43u | (4u - size) << 2);
+                lss_put_u32(a.data + 4, value);
         } else {
                 a.data[0] = 0x80;
-                lss_put_u32(a.data + 4, f->data[0] == 0x40 ? 0x06020000u : 0x05040001u);
+                lss_put_u32(a.data + 4, code);
         }
-        s->emit(s->userdata, &a, tx_delay(s));
+        if (!tx_lost(s))
+                s->emit(s->userdata, &a, tx_delay(s));
 }
 
 static bool is_sdo_request(const lss_slave *s, const lss_frame *f) {
@@ -466,7 +556,7 @@ void lss_slave_on_time(lss_slave *s, uint64_t now_us) {
 }
 
 uint64_t lss_slave_deadline(const lss_slave *s) {
-        return s->switch_at_us;
+        return s->switch_at_us < s->heartbeat_at_us ? s->switch_at_us : s->heartbeat_at_us;
 }
 
 bool lss_slave_on_bus(const lss_slave *s, uint8_t bus_bit_index, uint64_t now_us) {

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
-/* The slave model: a CiA 305 LSS slave (plus the bits of NMT it needs) with
- * fault knobs. Sans-I/O: fed frames and time, it emits frames through a
+/* The slave model: a CiA 305 LSS slave (plus the bits of CiA 301 a master
+ * meets: NMT states, boot-up, heartbeat producer, an SDO server with the
+ * identity object 1018h) with fault knobs. Sans-I/O: fed frames and time, it emits frames through a
  * callback with the delay after which they go on the bus. Used in-process by
  * the unit tests (membus) and on SocketCAN by lss-sim. */
 #pragma once
@@ -53,6 +54,11 @@ typedef struct lss_slave_faults {
         uint32_t spike_us;        /* (per million): a host that stalls now and then */
         uint32_t rx_loss_ppm;     /* each received frame is lost with this probability
                                    * (per million): a receive FIFO overrun */
+        uint32_t tx_loss_ppm;     /* each frame the slave sends is lost with this
+                                   * probability (per million): a full transmit queue */
+        /* not a fault, a setting: heartbeat producer time (object 1017h) in
+         * ms, 0 = no heartbeat */
+        uint16_t heartbeat_ms;
 } lss_slave_faults;
 
 void lss_slave_faults_default(lss_slave_faults *f);
@@ -95,6 +101,7 @@ typedef struct lss_slave {
         uint64_t tx_ready_us;
         unsigned changes;         /* incremented on every persistent state change */
         bool late_found_sent;     /* late_found_us used up */
+        uint64_t heartbeat_at_us; /* next heartbeat, UINT64_MAX none */
         lss_slave_emit_fn emit;
         void *userdata;
 } lss_slave;
@@ -106,6 +113,9 @@ void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8
  * NMT Reset Node does the same (it reloads the stored values, so a pending
  * node-ID that was not stored is lost). */
 void lss_slave_power_on(lss_slave *s, uint64_t now_us);
+/* Heartbeat producer time (1017h) in ms, 0 = off: the next heartbeat is
+ * one period after the slave's current time (and after every boot-up). */
+void lss_slave_set_heartbeat(lss_slave *s, uint16_t period_ms);
 /* Every frame on the bus (the slave's own excepted). */
 void lss_slave_on_frame(lss_slave *s, const lss_frame *f, uint64_t now_us);
 /* Time passed; call at lss_slave_deadline(). */

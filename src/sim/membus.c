@@ -48,6 +48,7 @@ struct membus {
         uint64_t now_ns;
         uint64_t seed;
         bool merge;
+        bool master_fifo;       /* the master's frames leave in the order it sent them */
 
         membus_node **slaves;
         size_t n_slaves, cap_slaves;
@@ -56,6 +57,8 @@ struct membus {
 
         heap future;            /* not ready yet, by ready time */
         heap ready;             /* waiting for the wire, by arbitration */
+        pending *mq;            /* master_fifo: the master's frames, oldest first */
+        size_t mq_head, mq_len, mq_cap;
         pending *aside;         /* scratch for merging */
         size_t n_aside, cap_aside;
         uint64_t seq;
@@ -188,6 +191,7 @@ void membus_free(membus *b) {
         free(b->future.v);
         free(b->ready.v);
         free(b->aside);
+        free(b->mq);
         free(b->rx);
         free(b);
 }
@@ -202,6 +206,13 @@ static void queue_frame(membus *b, const lss_frame *f, uint64_t ready_ns, enum s
                 .kind = (uint8_t) kind,
         };
         /* out of memory in a test harness: the frame is lost, like a full tx queue */
+        if (kind == SRC_MASTER && b->master_fifo) {
+                if (b->mq_head > 0 && b->mq_head == b->mq_len)
+                        b->mq_head = b->mq_len = 0;
+                if (grow((void **) &b->mq, &b->mq_cap, b->mq_len + 1, sizeof(pending)) == 0)
+                        b->mq[b->mq_len++] = p;
+                return;
+        }
         (void) heap_push(&b->future, &p);
 }
 
@@ -222,6 +233,7 @@ size_t membus_add_slave(membus *b, const lss_identity *id, uint8_t node_id, cons
         lss_slave_init(&n->s, id, node_id, b->bus_index, faults, sim_random_slave_seed(b->seed, n->index), slave_emit, n);
         /* power-on is the caller's choice, but the slave lives on bus time */
         n->s.now_us = n->s.tx_ready_us = b->now_ns / 1000;
+        lss_slave_set_heartbeat(&n->s, n->s.faults.heartbeat_ms);
         n->deadline_us = lss_slave_deadline(&n->s);
         b->slaves[b->n_slaves++] = n;
         b->deadline_dirty = true;
@@ -300,12 +312,14 @@ static void refresh_deadlines(membus *b) {
 static uint64_t next_start_ns(const membus *b) {
         if (b->busy)
                 return NO_TIME;
-        uint64_t t;
+        uint64_t t = NO_TIME;
         if (b->ready.n > 0)
                 t = 0;
         else if (b->future.n > 0)
                 t = b->future.v[0].ready_ns;
-        else
+        if (b->mq_head < b->mq_len && b->mq[b->mq_head].ready_ns < t)
+                t = b->mq[b->mq_head].ready_ns;
+        if (t == NO_TIME)
                 return NO_TIME;
         if (t < b->wire_free_ns)
                 t = b->wire_free_ns;
@@ -346,9 +360,14 @@ static bool already_sending(const membus *b, const pending *p) {
 
 /* Identical frames from other nodes waiting for this same start go out
  * together with it; a node's second copy stays queued. */
-static void merge_identical(membus *b, uint64_t t_us) {
+static void merge_identical(membus *b, uint64_t t_ns, uint64_t t_us) {
         pending p;
         b->n_aside = 0;
+        if (b->mq_head < b->mq_len && b->mq[b->mq_head].ready_ns <= t_ns &&
+            same_frame(&b->mq[b->mq_head].f, &b->wire.f) && !already_sending(b, &b->mq[b->mq_head])) {
+                mark_sender(b, &b->mq[b->mq_head++]);
+                b->stats.merged_frames++;
+        }
         while (b->ready.n > 0 && b->ready.v[0].arb == b->wire.arb) {
                 heap_pop(&b->ready, &p);
                 if (!may_send(b, &p, t_us)) {
@@ -378,9 +397,14 @@ static void start_frame(membus *b, uint64_t t_ns) {
                 heap_pop(&b->future, &p);
                 (void) heap_push(&b->ready, &p);
         }
-        if (b->ready.n == 0)
+        /* the master's oldest frame takes part in the arbitration */
+        if (b->mq_head < b->mq_len && b->mq[b->mq_head].ready_ns <= t_ns &&
+            (b->ready.n == 0 || by_arbitration(&b->mq[b->mq_head], &b->ready.v[0])))
+                p = b->mq[b->mq_head++];
+        else if (b->ready.n == 0)
                 return;
-        heap_pop(&b->ready, &p);
+        else
+                heap_pop(&b->ready, &p);
         if (!may_send(b, &p, t_us)) {
                 /* a node at another bit rate (or retuning) never gets a frame through */
                 b->stats.dropped_frames++;
@@ -396,7 +420,7 @@ static void start_frame(membus *b, uint64_t t_ns) {
         b->wire_end_ns = t_ns + dur;
         b->busy_ns += dur;
         if (b->merge)
-                merge_identical(b, t_us);
+                merge_identical(b, t_ns, t_us);
 }
 
 static void count_frame(membus *b, const pending *p) {
@@ -514,4 +538,8 @@ void membus_set_seed(membus *b, uint64_t seed) {
 
 void membus_set_merge_identical(membus *b, bool merge) {
         b->merge = merge;
+}
+
+void membus_set_master_fifo(membus *b, bool fifo) {
+        b->master_fifo = fifo;
 }

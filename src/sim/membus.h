@@ -64,3 +64,8 @@ void membus_set_seed(membus *b, uint64_t seed);
  * nodes that start on the same bit go out as one frame, as on a real bus
  * (e.g. many fastscan answers). Off by default: every copy is sent. */
 void membus_set_merge_identical(membus *b, bool merge);
+/* The master's frames leave in the order it sent them, as from a SocketCAN
+ * socket (one FIFO queue to a controller with one transmit buffer): only
+ * the oldest takes part in the arbitration. Off by default: all of its
+ * frames ready compete by identifier. Set before the master sends. */
+void membus_set_master_fifo(membus *b, bool fifo);

@@ -705,6 +705,37 @@ START_TEST(faults_per_serial) {
 END_TEST
 
 /* Encoder: LSS only in NMT Stopped. */
+/* --heartbeat and --nmt-state: heartbeats from the boot-up on, the SDO
+ * server of 1018h, no SDO in Stopped. */
+START_TEST(heartbeat_and_nmt_state) {
+        uint64_t t = 0;
+        sim *s = NEW_SIM(t, "vcan0", "--slave", "1:2:3:4:5", "--heartbeat", "20", "--nmt-state", "stopped");
+        capture c = {};
+        run_until(s, 45000, &c);
+        ck_assert_uint_eq(c.n, 3);
+        ck_assert_str_eq(fmt(&c.f[0]), "705#00");
+        ck_assert_str_eq(fmt(&c.f[1]), "705#04");
+        ck_assert_uint_eq(c.t[1], 20000);
+        ck_assert_str_eq(fmt(&c.f[2]), "705#04");
+        sim_on_frame(s, &(lss_frame) { .id = 0x605, .len = 8, .data = { 0x40, 0x18, 0x10, 0x04 } }, 45000);
+        c.n = 0;
+        run_until(s, 59000, &c);
+        ck_assert_uint_eq(c.n, 0);
+        t = 59000;
+        EXCHANGE(s, &t, "000#0105", "705#05", "705#05", "705#05");
+        /* the exchange ran until 109 ms: the next heartbeat is at 120 ms */
+        sim_on_frame(s, &(lss_frame) { .id = 0x605, .len = 8, .data = { 0x40, 0x18, 0x10, 0x04 } }, 110000);
+        c.n = 0;
+        run_until(s, 110500, &c);
+        ck_assert_uint_eq(c.n, 1);
+        ck_assert_str_eq(fmt(&c.f[0]), "585#4318100404000000");
+        sim_free(s);
+
+        USAGE_ERROR("--heartbeat '70000'", "vcan0", "--heartbeat", "70000");
+        USAGE_ERROR("--nmt-state 'running'", "vcan0", "--nmt-state", "running");
+}
+END_TEST
+
 START_TEST(encoder_needs_stopped) {
         uint64_t t = 0;
         sim *s = NEW_SIM(t, "vcan0", "--profile", "encoder", "--slave", "0xEC:0x1234:1:0x1276");
@@ -923,6 +954,7 @@ int main(void) {
         tcase_add_test(tc, random_identities);
         tcase_add_test(tc, faults_per_serial);
         tcase_add_test(tc, encoder_needs_stopped);
+        tcase_add_test(tc, heartbeat_and_nmt_state);
         tcase_add_test(tc, profile_bit_timing);
         tcase_add_test(tc, bitrate_follow);
         tcase_add_test(tc, state_restart);

@@ -17,6 +17,18 @@ static void run_idle(membus *b) {
                 membus_advance(b, t);
 }
 
+typedef struct id_log {
+        uint32_t *ids;
+        unsigned *n;
+} id_log;
+
+static void record_ids(void *ud, const lss_frame *f, uint64_t t_us) {
+        const id_log *l = ud;
+        (void) t_us;
+        ck_assert_uint_lt(*l->n, 5);
+        l->ids[(*l->n)++] = f->id;
+}
+
 static unsigned drain(membus *b, lss_frame *out, uint64_t *t, unsigned max) {
         unsigned n = 0;
         lss_frame f;
@@ -523,9 +535,10 @@ START_TEST(merge_identical) {
 }
 END_TEST
 
-START_TEST(merge_with_stranger_and_master) {
+static void merge_with_stranger_and_master_fifo(bool fifo) {
         membus *b = membus_new(125000);
         membus_set_merge_identical(b, true);
+        membus_set_master_fifo(b, fifo);
         membus_add_slave(b, &(lss_identity) { 1, 2, 3, 4 }, 0xFF, NULL);
         lss_frame f;
         lss_encode_switch_global(&f, LSS_MODE_CONFIGURATION);
@@ -540,6 +553,37 @@ START_TEST(merge_with_stranger_and_master) {
         ck_assert_uint_eq(membus_get_stats(b)->merged_frames, 2);
         ck_assert(membus_slave(b, 0)->st.configuration);
         membus_free(b);
+}
+
+START_TEST(merge_with_stranger_and_master) {
+        merge_with_stranger_and_master_fifo(false);
+        merge_with_stranger_and_master_fifo(true);
+}
+END_TEST
+
+/* master_fifo: the master's frames leave in the order sent, whatever their
+ * identifiers; by default the lowest identifier ready goes first. */
+static void master_order(bool fifo, const uint32_t *expect) {
+        membus *b = membus_new(125000);
+        membus_set_master_fifo(b, fifo);
+        const uint32_t ids[] = { 0x7E5, 0x605, 0x000, 0x601 };
+        uint32_t seen[5];
+        unsigned n = 0;
+        membus_set_trace(b, record_ids, &(id_log) { seen, &n });
+        for (size_t i = 0; i < 4; i++)
+                membus_master_send(b, &(lss_frame) { .id = ids[i], .len = 2 });
+        /* a stranger's frame ready later still wins against the queue */
+        membus_inject(b, &(lss_frame) { .id = 0x100, .len = 1 }, 100);
+        run_idle(b);
+        ck_assert_uint_eq(n, 5);
+        for (unsigned i = 0; i < 5; i++)
+                ck_assert_uint_eq(seen[i], expect[i]);
+        membus_free(b);
+}
+
+START_TEST(master_fifo_order) {
+        master_order(false, (const uint32_t[]) { 0x000, 0x100, 0x601, 0x605, 0x7E5 });
+        master_order(true, (const uint32_t[]) { 0x7E5, 0x100, 0x605, 0x000, 0x601 });
 }
 END_TEST
 
@@ -692,6 +736,7 @@ int main(void) {
         tcase_add_test(tc, jitter_determinism);
         tcase_add_test(tc, merge_identical);
         tcase_add_test(tc, merge_with_stranger_and_master);
+        tcase_add_test(tc, master_fifo_order);
         tcase_add_test(tc, merge_skips_off_bus_sender);
         suite_add_tcase(s, tc);
         TCase *big = tcase_create("many");

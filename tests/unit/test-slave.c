@@ -1113,6 +1113,173 @@ START_TEST(changes_counter) {
 }
 END_TEST
 
+/* An SDO request to node 0x22 (index, sub-index, command byte). */
+static unsigned sdo(rig *r, uint8_t cs, uint16_t index, uint8_t sub) {
+        lss_frame f = { .id = 0x622, .len = 8, .data = { cs, (uint8_t) index, (uint8_t) (index >> 8), sub } };
+        return ask(r, &f);
+}
+
+/* The last frame is the SDO answer of node 0x22 to index:sub with this
+ * command byte and 32-bit payload. */
+static void expect_sdo(const rig *r, uint8_t cs, uint16_t index, uint8_t sub, uint32_t v) {
+        const lss_frame *f = last(r);
+        ck_assert_uint_eq(f->id, 0x5A2);
+        ck_assert_uint_eq(f->len, 8);
+        ck_assert_uint_eq(f->flags, 0);
+        ck_assert_uint_eq(f->data[0], cs);
+        ck_assert_uint_eq(lss_get_u16(f->data + 1), index);
+        ck_assert_uint_eq(f->data[3], sub);
+        ck_assert_uint_eq(lss_get_u32(f->data + 4), v);
+}
+
+/* Default faults but for the heartbeat and the transmit loss. */
+static lss_slave_faults faults_with(uint16_t heartbeat_ms, uint32_t tx_loss_ppm) {
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.heartbeat_ms = heartbeat_ms;
+        f.tx_loss_ppm = tx_loss_ppm;
+        return f;
+}
+
+/* 1018h from the LSS address, 1000h, 1017h: expedited uploads with the size
+ * indicated; everything else aborted with the CiA 301 code. */
+START_TEST(sdo_identity_object) {
+        rig r;
+        lss_slave_faults f = faults_with(250, 0);
+        rig_init(&r, 0x22, &f);
+        static const struct {
+                uint8_t cs;
+                uint16_t index;
+                uint8_t sub, answer;
+                uint32_t value;
+        } cases[] = {
+                { 0x40, 0x1018, 0, 0x4F, 4 },
+                { 0x40, 0x1018, 1, 0x43, 0x00000319 },
+                { 0x40, 0x1018, 2, 0x43, 0x00A10002 },
+                { 0x40, 0x1018, 3, 0x43, 0x00020005 },
+                { 0x40, 0x1018, 4, 0x43, 0x12345678 },
+                { 0x40, 0x1000, 0, 0x43, 0x00000192 },
+                { 0x40, 0x1017, 0, 0x4B, 250 },
+                /* aborts */
+                { 0x40, 0x1018, 5, 0x80, 0x06090011 },
+                { 0x40, 0x1000, 1, 0x80, 0x06090011 },
+                { 0x40, 0x2000, 0, 0x80, 0x06020000 },
+                /* downloads: never written */
+                { 0x23, 0x1017, 0, 0x80, 0x06010002 },
+                { 0x2F, 0x1018, 1, 0x80, 0x06010002 },
+                { 0x23, 0x6000, 0, 0x80, 0x06020000 },
+                /* other commands: segment requests, block transfers */
+                { 0x60, 0x1018, 1, 0x80, 0x05040001 },
+                { 0xA4, 0x1018, 1, 0x80, 0x05040001 },
+        };
+        for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+                ck_assert_uint_eq(sdo(&r, cases[i].cs, cases[i].index, cases[i].sub), 1);
+                expect_sdo(&r, cases[i].answer, cases[i].index, cases[i].sub, cases[i].value);
+        }
+        ck_assert_uint_eq(r.s.faults.heartbeat_ms, 250);
+        /* the client's abort is not answered */
+        ck_assert_uint_eq(sdo(&r, 0x80, 0x1018, 1), 0);
+        /* another node's request, a short frame: nothing */
+        lss_frame o = { .id = 0x623, .len = 8, .data = { 0x40, 0x18, 0x10, 0x01 } };
+        ck_assert_uint_eq(ask(&r, &o), 0);
+        o.id = 0x622;
+        o.len = 4;
+        ck_assert_uint_eq(ask(&r, &o), 0);
+        /* a non-configured slave has no SDO server */
+        rig_init(&r, 0xFF, NULL);
+        ck_assert_uint_eq(sdo(&r, 0x40, 0x1018, 1), 0);
+}
+END_TEST
+
+/* No SDO in Stopped; pre-operational and operational answer. */
+START_TEST(sdo_silent_when_stopped) {
+        rig r;
+        rig_init(&r, 0x22, NULL);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_STOP, 0x22), 0);
+        ck_assert_uint_eq(sdo(&r, 0x40, 0x1018, 1), 0);
+        ck_assert_uint_eq(sdo(&r, 0x40, 0x1000, 0), 0);
+        ck_assert_uint_eq(sdo(&r, 0x23, 0x1017, 0), 0);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_START, 0), 0);
+        ck_assert_uint_eq(sdo(&r, 0x40, 0x1018, 4), 1);
+        expect_sdo(&r, 0x43, 0x1018, 4, ID.serial);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_STOP, 0), 0);
+        ck_assert_uint_eq(sdo(&r, 0x40, 0x1018, 4), 0);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_PRE_OPERATIONAL, 0x22), 0);
+        ck_assert_uint_eq(sdo(&r, 0x40, 0x1018, 4), 1);
+        /* a reset from Stopped: boot-up, pre-operational, answers again */
+        ck_assert_uint_eq(nmt(&r, NMT_CS_STOP, 0), 0);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_NODE, 0x22), 1);
+        expect_bootup(&r, 0x22);
+        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+        ck_assert_uint_eq(sdo(&r, 0x40, 0x1018, 1), 1);
+}
+END_TEST
+
+/* Heartbeat: every period from the boot-up, with the NMT state, also in
+ * Stopped; none without a node-ID; 0 = off. */
+START_TEST(heartbeat_producer) {
+        rig r;
+        lss_slave_faults f = faults_with(100, 0);
+        memset(&r, 0, sizeof(r));
+        lss_slave_init(&r.s, &ID, 0x22, 4, &f, 42, capture, &r);
+        lss_slave_power_on(&r.s, 5000);
+        ck_assert_uint_eq(r.n, 1);
+        expect_bootup(&r, 0x22);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), 105000);
+        lss_slave_on_time(&r.s, 104999);
+        ck_assert_uint_eq(r.n, 1);
+        lss_slave_on_time(&r.s, 105000);
+        ck_assert_uint_eq(r.n, 2);
+        ck_assert_uint_eq(last(&r)->id, 0x722);
+        ck_assert_uint_eq(last(&r)->len, 1);
+        ck_assert_uint_eq(last(&r)->data[0], 0x7F);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), 205000);
+        r.now = 150000;
+        ck_assert_uint_eq(nmt(&r, NMT_CS_START, 0), 0);
+        lss_slave_on_time(&r.s, 205000);
+        ck_assert_uint_eq(last(&r)->data[0], 0x05);
+        r.now = 250000;
+        ck_assert_uint_eq(nmt(&r, NMT_CS_STOP, 0), 0);
+        lss_slave_on_time(&r.s, 305000);
+        ck_assert_uint_eq(r.n, 4);
+        ck_assert_uint_eq(last(&r)->data[0], 0x04);
+        /* overdue by several periods: one heartbeat, the next a period later */
+        lss_slave_on_time(&r.s, 1000000);
+        ck_assert_uint_eq(r.n, 5);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), 1100000);
+        /* a reset: boot-up, the period starts over */
+        r.now = 1050000;
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 1);
+        expect_bootup(&r, 0x22);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), 1150000);
+        /* off */
+        lss_slave_set_heartbeat(&r.s, 0);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), UINT64_MAX);
+        /* non-configured: the timer runs, nothing is sent */
+        lss_slave_init(&r.s, &ID, 0xFF, 4, &f, 42, capture, &r);
+        unsigned n = r.n;
+        lss_slave_on_time(&r.s, 100000);
+        lss_slave_on_time(&r.s, 200000);
+        ck_assert_uint_eq(r.n, n);
+}
+END_TEST
+
+/* tx_loss_ppm: frames the slave sends are lost, about as often as asked. */
+START_TEST(fault_tx_loss) {
+        rig r;
+        lss_slave_faults f = faults_with(0, 250000);
+        rig_init(&r, 0x22, &f);
+        unsigned got = 0;
+        for (unsigned i = 0; i < 400; i++) {
+                got += sdo(&r, 0x40, 0x1018, 1);
+                if (r.n > CAP_MAX - 8)
+                        r.n = 0;
+        }
+        ck_assert_uint_gt(got, 250);
+        ck_assert_uint_lt(got, 350);
+}
+END_TEST
+
 START_TEST(no_emit_callback) {
         lss_slave s;
         lss_slave_init(&s, &ID, 0xFF, 4, NULL, 1, NULL, NULL);
@@ -1169,6 +1336,10 @@ int main(void) {
         tcase_add_test(tc, answers_keep_order);
         tcase_add_test(tc, changes_counter);
         tcase_add_test(tc, no_emit_callback);
+        tcase_add_test(tc, sdo_identity_object);
+        tcase_add_test(tc, sdo_silent_when_stopped);
+        tcase_add_test(tc, heartbeat_producer);
+        tcase_add_test(tc, fault_tx_loss);
         suite_add_tcase(s, tc);
         SRunner *sr = srunner_create(s);
         srunner_run_all(sr, CK_NORMAL);
