@@ -104,8 +104,8 @@ static int run_sdo(size_t n, uint64_t seed) {
         f.latency_us = LATENCY_US;
         f.jitter_us = JITTER_US;
         for (size_t i = 0; i < n; i++) {
-                lss_identity id = { (uint32_t) rnd(&seed), (uint32_t) rnd(&seed), (uint32_t) rnd(&seed),
-                                    (uint32_t) rnd(&seed) };
+                lss_identity id = { (uint32_t) sim_random_next(&seed), (uint32_t) sim_random_next(&seed), (uint32_t) sim_random_next(&seed),
+                                    (uint32_t) sim_random_next(&seed) };
                 membus_add_slave(b, &id, (uint8_t) (i + 1), &f);
         }
         lss_master *m = lss_master_new(NULL);

@@ -70,7 +70,7 @@ static uint64_t tx_delay(lss_slave *s) {
 
 /* tx_loss_ppm: the frame never leaves the slave */
 static bool tx_lost(lss_slave *s) {
-        return s->faults.tx_loss_ppm > 0 && next_random(&s->rng) % 1000000 < s->faults.tx_loss_ppm;
+        return s->faults.tx_loss_ppm > 0 && sim_random_next(&s->rng) % 1000000 < s->faults.tx_loss_ppm;
 }
 
 static void send_frame(lss_slave *s, const lss_frame *f) {
