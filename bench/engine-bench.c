@@ -4,7 +4,8 @@
  * give node-IDs to N non-configured slaves,
  *   (a) blind fastscan, (b) vendor and product known, (c) full identity known,
  * and (d) the blind Scan: one enumeration of every slave (one vendor and
- * product, revision and serial random: the lss-sim set-up of bench/run).
+ * product, revision and serial random: the lss-sim set-up of bench/run),
+ * (e) AutoAssign with a map of full identities (what lssd runs for one).
  * And the SDO identity discovery of node-IDs 1..127 with N configured devices
  * at 1..N, against the bus floor of its frames.
  * Not a test: prints tables. Correctness is still checked: every slave must
@@ -13,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "lss/lss_autoassign.h"
 #include "lss/lss_master.h"
 #include "sim/lss_drive.h"
 #include "sim/membus.h"
@@ -22,9 +24,10 @@
 #define LATENCY_US 1000u
 #define JITTER_US 300u
 
-enum mode { BLIND, KNOWN_VP, FULL, SCAN };
+enum mode { BLIND, KNOWN_VP, FULL, SCAN, AA_MAPPED };
 static const char *const mode_names[] = { "(a) blind fastscan", "(b) vendor+product known",
-                                          "(c) full identity known", "(d) blind Scan (enumerate)" };
+                                          "(c) full identity known", "(d) blind Scan (enumerate)",
+                                          "(e) AutoAssign, full map" };
 
 typedef struct row {
         uint64_t lss_frames, all_frames, busy_us, elapsed_us;
@@ -58,6 +61,25 @@ static int run_case(enum mode mode, size_t n, uint64_t seed, row *out) {
                         fprintf(stderr, "Scan of %zu: %zu found: %s\n", n, r->n_devices, r->message);
                         bad = 1;
                 }
+                n = 0;
+        }
+        if (mode == AA_MAPPED) {
+                /* what lssd runs for a map: node-IDs probed, store, boot-ups verified */
+                lss_map_entry *map = calloc(n, sizeof(*map));
+                for (size_t i = 0; i < n; i++)
+                        map[i] = (lss_map_entry) { .id = ids[i], .revision_known = true, .node_id = (uint8_t) (i + 1) };
+                lss_autoassign_plan p = { .map = map, .n_map = n, .store = true };
+                lss_master_autoassign(m, &p, membus_now(b));
+                const lss_result *r = lss_drive(m, b, 3600ull * 1000000, NULL, NULL);
+                for (size_t i = 0; i < n; i++) {
+                        lss_slave *s = membus_find(b, &ids[i]);
+                        if (r->status != LSS_OK || !s || s->st.active_node_id != i + 1) {
+                                fprintf(stderr, "AutoAssign: MIS-ASSIGNMENT or failure at node %zu: %s\n", i + 1,
+                                        r->message);
+                                bad = 1;
+                        }
+                }
+                free(map);
                 n = 0;
         }
         for (size_t i = 0; i < n; i++) {
@@ -153,7 +175,7 @@ int main(void) {
                fastscan_floor_us / 1000);
         printf("%-26s %4s %10s %10s %12s %12s %10s %10s\n", "case", "N", "LSS frames", "frames/N", "bus time ms",
                "elapsed ms", "ms/node", "vs floor");
-        for (int mode = BLIND; mode <= SCAN; mode++)
+        for (int mode = BLIND; mode <= AA_MAPPED; mode++)
                 for (size_t i = 0; i < 3u + (mode == SCAN); i++) {
                         row r;
                         if (i == 3)
@@ -161,7 +183,7 @@ int main(void) {
                         bad |= run_case((enum mode) mode, ns[i], 1000 + ns[i], &r);
                         double per_node = r.elapsed_us / 1000.0 / ns[i];
                         double vs;
-                        if (mode == FULL)
+                        if (mode == FULL || mode == AA_MAPPED)
                                 vs = (double) r.lss_frames / (10.0 * ns[i]);
                         else
                                 vs = r.elapsed_us / (double) ns[i] / fastscan_floor_us;
@@ -169,7 +191,7 @@ int main(void) {
                                (unsigned long long) r.lss_frames, (double) r.lss_frames / ns[i],
                                r.busy_us / 1000.0, r.elapsed_us / 1000.0, per_node, vs);
                 }
-        printf("# vs floor: (c) LSS frames / 10 per node (target <= 1.5x); (a),(b),(d) elapsed per node / fastscan "
+        printf("# vs floor: (c),(e) LSS frames / 10 per node (target <= 1.5x); (a),(b),(d) elapsed per node / fastscan "
                "floor (target for (a) <= 2x)\n");
 
         printf("\n# SDO identity discovery (window %u), node-IDs 1..127, N devices at 1..N, same latency\n",

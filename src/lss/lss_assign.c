@@ -96,7 +96,7 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                                "node-ID %u already answered on the bus", s->node_id);
                 goto out;
         }
-        if (s->flags & LSS_ASSIGN_CHECK_FREE) {
+        if ((s->flags & LSS_ASSIGN_CHECK_FREE) && !(s->free && s->free[s->node_id])) {
                 step_node_in_use(m, s->node_id);
                 PT_YIELD(&s->tail_pc);
                 if (m->step.n_answers > 0) {

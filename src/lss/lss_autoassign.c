@@ -30,7 +30,9 @@ typedef struct lss_aa_state {
         int entry;              /* map entry of the device being handled, -1 none */
         bool changed;
         uint8_t target;
-        bool taken[128];        /* answered an SDO probe before NMT Stop silenced them */
+        bool taken[128];        /* answered the SDO probe at the start (before an NMT Stop) */
+        bool free[128];         /* silent to it, and nobody assigned there since */
+        lss_probe_state probe;
         lss_outcome *out;
         size_t n_out, cap_out;
         size_t given_before;    /* node-IDs given before the current blind enumeration */
@@ -185,6 +187,18 @@ static unsigned assign_flags(const lss_aa_state *s) {
                (s->plan->dry_run ? LSS_ASSIGN_DRY_RUN : 0);
 }
 
+/* After an assignment: what the probe at the start said no longer holds for
+ * the node-ID the device left (probed again when needed) or took. */
+static void moved(lss_aa_state *s, const lss_master *m) {
+        if (!m->result.changed)
+                return;
+        if (lss_node_id_valid(m->result.node_id)) {
+                s->taken[m->result.node_id] = false;
+                s->free[m->result.node_id] = false;
+        }
+        s->free[s->target] = false;
+}
+
 /* NMT Stop is sent (nmt_stop, and not a dry run) */
 static bool stops(const lss_aa_state *s) {
         return s->plan->nmt_stop && !s->plan->dry_run;
@@ -225,7 +239,8 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                         m->as.id = s->todo[s->t].id;
                         m->as.node_id = s->target;
                         m->as.flags = assign_flags(s);
-                        m->as.taken = stops(s) ? s->taken : NULL;
+                        m->as.taken = s->taken;
+                        m->as.free = s->free;
                         m->as.unstored = s->plan->unstored;
                         PT_CALL(&s->i_pc, proc_assign(m, &m->as));
                         /* a pool ID somebody already answers to: take the next one */
@@ -241,6 +256,7 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                         break;
                 }
                 s->changed = m->result.changed;
+                moved(s, m);
                 record(m, s, &s->todo[s->t].id, s->entry < 0);
                 if (s->changed && stops(s)) {
                         /* the verifying reset took them out of Stopped */
@@ -264,12 +280,14 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                 m->as.id = s->plan->map[s->i].id;
                 m->as.node_id = s->target;
                 m->as.flags = assign_flags(s);
-                m->as.taken = stops(s) ? s->taken : NULL;
+                m->as.taken = s->taken;
+                m->as.free = s->free;
                 m->as.unstored = s->plan->unstored;
                 PT_CALL(&s->d_pc, proc_assign(m, &m->as));
                 if (m->result.status != LSS_E_NOT_FOUND) {
                         s->handled[s->i] = true;
                         s->changed = m->result.changed;
+                        moved(s, m);
                         record(m, s, &s->plan->map[s->i].id, false);
                         if (s->changed && stops(s)) {
                                 /* the verifying reset took them out of Stopped */
@@ -334,17 +352,15 @@ static int proc_autoassign(lss_master *m) {
         for (size_t i = 0; i < s->plan->n_map; i++)
                 s->used[s->plan->map[i].node_id] = true;
 
+        /* Which mapped node-IDs somebody answers to, all at the start, a
+         * batch of them per wait (one wait each cost a full timeout per
+         * device); stopped devices do not answer SDO, so before NMT Stop. */
+        s->probe = (lss_probe_state) { .taken = s->taken, .free = s->free };
+        for (size_t i = 0; i < s->plan->n_map; i++)
+                if (!s->taken[s->plan->map[i].node_id])
+                        s->probe.ids[s->probe.n_ids++] = s->plan->map[i].node_id;
+        PT_CALL(&s->pc, proc_probe(m, &s->probe));
         if (stops(s)) {
-                /* Stopped devices do not answer SDO: learn which mapped
-                 * node-IDs are taken while they still can. */
-                for (s->i = 0; s->i < s->plan->n_map; s->i++) {
-                        s->target = s->plan->map[s->i].node_id;
-                        if (s->taken[s->target])
-                                continue;
-                        step_node_in_use(m, s->target);
-                        PT_YIELD(&s->pc);
-                        s->taken[s->target] = m->step.n_answers > 0;
-                }
                 STEP_REQUEST(m, &s->pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
                 /* give the devices time to act on it before LSS starts */
                 m->step = (lss_step) { .kind = STEP_DELAY, .wait_us = 20000 };

@@ -11,7 +11,8 @@
  *      configuration (while a configured slave that took part is kept in
  *      configuration: all back to waiting and a selective switch to F);
  *   3. a non-configured slave is set aside: it gets a volatile pending
- *      node-ID T nobody answers to (SDO probe), goes back to waiting, takes
+ *      node-ID T nobody answers to (SDO probe, a few candidates at once,
+ *      each used within a few finds), goes back to waiting, takes
  *      T and stops answering Fastscan; a configured one stays in
  *      configuration (it should not have answered at all).
  * At the end, also on failure or cancel, every slave set aside gets 255
@@ -121,19 +122,25 @@ static int reselect_kept(lss_master *m, lss_scan_state *s) {
 static int set_aside(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->apc);
         for (;;) {
-                while (s->next_temp >= LSS_NODE_ID_MIN && s->avoid && s->avoid[s->next_temp])
+                while (s->next_temp >= LSS_NODE_ID_MIN &&
+                       ((s->avoid && s->avoid[s->next_temp]) || s->temp_taken[s->next_temp]))
                         s->next_temp--;
                 if (s->next_temp < LSS_NODE_ID_MIN) {
                         master_fail(m, LSS_E_INCOMPLETE, "no free node-ID left to set slave " ID_FMT " aside",
                                     ID_ARGS(s->found));
                         goto out;
                 }
-                s->temp = s->next_temp--;
-                step_node_in_use(m, s->temp);
-                PT_YIELD(&s->apc);
-                if (m->step.n_answers == 0)
+                if (s->temp_free[s->next_temp])
                         break;
+                /* the next few candidates from the top down, probed together */
+                s->probe = (lss_probe_state) { .taken = s->temp_taken, .free = s->temp_free };
+                for (int id = s->next_temp; id >= (int) LSS_NODE_ID_MIN && s->probe.n_ids < LSS_MAX_TX; id--)
+                        if (!(s->avoid && s->avoid[id]) && !s->temp_taken[id])
+                                s->probe.ids[s->probe.n_ids++] = (uint8_t) id;
+                PT_CALL(&s->apc, proc_probe(m, &s->probe));
         }
+        s->temp = s->next_temp--;
+        s->temp_free[s->temp] = false;
         REQUEST_RETRIED(m, &s->apc, s->attempt, lss_encode_configure_node_id(&f__, s->temp),
                         LSS_CS_CONFIGURE_NODE_ID);
         if (!step_answered(m) || step_conflict(m)) {
@@ -233,7 +240,7 @@ static int give_back(lss_master *m, lss_scan_state *s) {
          * verified would leave it in configuration. Whoever answers an
          * inquiry (asked again while silent: a lost one costs a retry) is
          * still there and is switched again. */
-        for (s->gb_try = 0;; s->gb_try++) {
+        for (s->gb_try = 0; s->n_cand > 0; s->gb_try++) {
                 REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                                 LSS_CS_INQUIRE_NODE_ID);
                 if (!step_answered(m) || s->gb_try >= m->timing.cfg.retries)
@@ -398,6 +405,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
                 s->next_temp = LSS_NODE_ID_MAX;
                 memset(s->back_due, 0, sizeof(s->back_due));
+                memset(s->temp_taken, 0, sizeof(s->temp_taken));
+                memset(s->temp_free, 0, sizeof(s->temp_free));
                 s->prog_base0 = m->prog_base;
                 s->prog_span0 = m->prog_span;
                 m->n_devices = 0;
@@ -431,7 +440,9 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         if (m->cancelling)
                                 break;
                         if (s->fs.none) {
-                                if (s->looks++ >= m->timing.cfg.retries)
+                                /* (a pass that found nobody, e.g. the map's devices
+                                 * all handled, asks once, as an empty bus costs) */
+                                if (s->looks++ >= (s->n_cand > 0 ? m->timing.cfg.retries : 0))
                                         break;
                                 /* Silence may be a slave that lost the ping (a frame lost
                                  * costs a retry, not a slave) or one whose fastscan

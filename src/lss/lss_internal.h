@@ -23,7 +23,7 @@ enum step_kind {
         STEP_LSS,    /* LSS request(s), answered by expect_cs or unconfirmed */
         STEP_BOOTUP, /* wait for the boot-up of a node (optionally after sending tx) */
         STEP_DELAY,  /* send tx (if any) and stay silent for wait_us */
-        STEP_SDO,    /* SDO upload request to node bootup_node: does anyone answer? */
+        STEP_SDO,    /* SDO upload requests (tx) to node-IDs: does anyone answer? */
         STEP_EVENT,  /* wait for the next frame or until wait_us: the procedure
                       * judges the frame itself (step.answer, first_at) */
 };
@@ -50,6 +50,14 @@ typedef struct lss_step {
         bool confirmed;        /* tx confirmation: the echo of the last request came back */
 } lss_step;
 
+/* Which of a list of node-IDs answer an SDO upload (proc_probe). */
+typedef struct lss_probe_state {
+        int pc;
+        uint8_t ids[128];
+        unsigned n_ids, i, k, n_batch;
+        bool *taken, *free;     /* results by node-ID (128 entries each) */
+} lss_probe_state;
+
 typedef struct lss_fastscan_state {
         int pc;
         lss_fastscan_known known;
@@ -69,6 +77,8 @@ typedef struct lss_assign_state {
         unsigned flags, attempt, field;
         bool selected;
         const bool *taken;      /* node-IDs known to be taken (128 entries), or NULL */
+        const bool *free;       /* node-IDs the operation probed free moments ago (128), or NULL:
+                                 * those are not probed again */
         const bool *unstored;   /* node-IDs that may not be stored (128 entries), or NULL */
         lss_fastscan_state fs;
         uint64_t until;         /* unassign: the reset slave must answer 255 by then */
@@ -98,6 +108,8 @@ typedef struct lss_scan_state {
                                  * (CiA 305: they take no part); one that answers again ends the pass */
         lss_device *again;      /* the candidate a round found a second time */
         bool back_due[128];     /* by temporary node-ID: set aside, not yet seen back at 255 */
+        bool temp_taken[128], temp_free[128]; /* temporary node-IDs probed: answered / silent, unused */
+        lss_probe_state probe;
         double prog_base0, prog_span0; /* the caller's progress frame */
         unsigned gb_try;
         bool selected;          /* this round confirmed by a selective switch (all went to waiting first) */
@@ -196,6 +208,8 @@ void step_on_tx_confirmed(lss_master *m, uint64_t at);
 void step_selective(lss_master *m, const lss_identity *id);
 /* SDO upload of 0x1000 to node_id: answered means the node-ID is taken. */
 void step_node_in_use(lss_master *m, uint8_t node_id);
+/* The same to up to LSS_MAX_TX node-IDs at once: one wait for all of them. */
+void step_nodes_in_use(lss_master *m, const uint8_t *ids, unsigned n);
 void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx);
 void step_on_stray(lss_master *m, const lss_frame *f);
 /* keep the operation's peak patience in the stats */
@@ -254,6 +268,8 @@ int proc_assign(lss_master *m, lss_assign_state *s);
 int proc_fastscan_assign(lss_master *m, lss_assign_state *s);
 int proc_unassign(lss_master *m, lss_assign_state *s);
 int proc_enumerate(lss_master *m, lss_scan_state *s);
+/* probe.c: sets taken[id] or free[id] for every id of s->ids[0, n_ids) */
+int proc_probe(lss_master *m, lss_probe_state *s);
 /* enumerate.c: Inquire Identity of the slave in configuration against
  * s->found (s->confirm, s->other) */
 int proc_confirm_found(lss_master *m, lss_scan_state *s);

@@ -32,11 +32,17 @@ void step_selective(lss_master *m, const lss_identity *id) {
 
 /* Every CANopen device has an SDO server: an expedited upload request of
  * object 0x1000 (device type) to a node-ID is answered by whoever has it. */
-void step_node_in_use(lss_master *m, uint8_t node_id) {
-        m->step = (lss_step) { .kind = STEP_SDO, .bootup_node = node_id, .discovery = true };
-        lss_frame f = { .id = 0x600u + node_id, .len = 8, .data = { 0x40, 0x00, 0x10, 0x00 } };
-        step_add_tx(m, &f);
+void step_nodes_in_use(lss_master *m, const uint8_t *ids, unsigned n) {
+        m->step = (lss_step) { .kind = STEP_SDO, .discovery = true };
+        for (unsigned i = 0; i < n && i < LSS_MAX_TX; i++) {
+                lss_frame f = { .id = 0x600u + ids[i], .len = 8, .data = { 0x40, 0x00, 0x10, 0x00 } };
+                step_add_tx(m, &f);
+        }
         step_start(m);
+}
+
+void step_node_in_use(lss_master *m, uint8_t node_id) {
+        step_nodes_in_use(m, &node_id, 1);
 }
 
 bool step_queue_tx(lss_master *m, const lss_frame *f) {
@@ -95,8 +101,13 @@ static bool step_matches(const lss_step *s, const lss_frame *f) {
                 uint8_t node, state;
                 return bootup_decode(f, &node, &state) && node == s->bootup_node && state == 0;
         }
-        if (s->kind == STEP_SDO)
-                return f->id == 0x580u + s->bootup_node && f->len == 8 && f->flags == 0;
+        if (s->kind == STEP_SDO) {
+                /* an answer of a node-ID asked */
+                for (unsigned i = 0; i < s->n_tx; i++)
+                        if (f->id == s->tx[i].id - 0x80u && f->len == 8 && f->flags == 0)
+                                return true;
+                return false;
+        }
         return s->kind == STEP_LSS && lss_is_response(f) && f->data[0] == (uint8_t) s->expect_cs;
 }
 

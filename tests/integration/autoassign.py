@@ -231,7 +231,7 @@ def test_mixed():
                   {A.serial: ('assigned', 255, 5), B.serial: ('assigned', 9, 6), C.serial: ('unchanged', 7, 7),
                    H.serial: ('conflict', 255, 255), D.serial: ('unknown', 255, 255), ABSENT: ('missing', 0, 0)},
                   'AutoAssign outcomes')
-        expect('node-ID 10 already answers' in outcomes[H.serial][3], 'conflict detail: %r' % (outcomes[H.serial],))
+        expect('node-ID 10 already answer' in outcomes[H.serial][3], 'conflict detail: %r' % (outcomes[H.serial],))
         expect_eq(result, 'partial', 'AutoAssign result')
         unknown = c.wait_signal(lambda m: m.member == 'UnknownDevice' and m.body[3] == D.serial)
         expect(unknown, 'UnknownDevice for the unmapped non-configured device')

@@ -218,6 +218,68 @@ START_TEST(heard_node_id_is_not_given) {
 }
 END_TEST
 
+/* The map's node-IDs are probed at the start, several per wait (one wait
+ * per device cost a full timeout each): a device that answers at a mapped
+ * node-ID in the middle of a batch still makes that entry a conflict, and a
+ * node-ID a device leaves during the pass is probed again before another
+ * takes it. */
+typedef struct sdo_runs {
+        unsigned run, longest, requests;
+} sdo_runs;
+
+static void count_sdo_runs(void *ud, const lss_frame *f, uint64_t t) {
+        sdo_runs *c = ud;
+        (void) t;
+        if (f->id >= 0x601 && f->id <= 0x67F) {
+                c->requests++;
+                if (++c->run > c->longest)
+                        c->longest = c->run;
+        } else if (f->id == LSS_COB_MASTER || f->id == NMT_COB)
+                c->run = 0;
+}
+
+START_TEST(probes_together) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(1000, 300);
+        lss_map_entry map[14];
+        const lss_identity Q = { 0x9A, 3, 1, 0x900 }, P = { 0x9A, 3, 1, 0x901 }, Z = { 0x55, 1, 1, 0x902 };
+        /* Q leaves 22 for 31, then P takes 22 */
+        membus_add_slave(b, &Q, 22, &f);
+        map[0] = (lss_map_entry) { .id = Q, .revision_known = true, .node_id = 31 };
+        membus_add_slave(b, &P, 30, &f);
+        map[1] = (lss_map_entry) { .id = P, .revision_known = true, .node_id = 22 };
+        for (unsigned i = 0; i < 12; i++) {
+                lss_identity id = { 0x9A, 3, 1, 0x800 + i };
+                membus_add_slave(b, &id, 0xFF, &f);
+                map[2 + i] = (lss_map_entry) { .id = id, .revision_known = true, .node_id = (uint8_t) (10 + i) };
+        }
+        membus_add_slave(b, &Z, 16, &f); /* not in the map, at entry 8's node-ID */
+        sdo_runs c = { 0 };
+        membus_set_trace(b, count_sdo_runs, &c);
+        lss_autoassign_plan p = { .map = map, .n_map = 14, .store = true };
+        lss_master *m = master_default();
+        ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+        for (unsigned i = 0; i < 14; i++) {
+                const lss_outcome *o = outcome_of(m, &map[i].id);
+                ck_assert_ptr_nonnull(o);
+                if (map[i].node_id == 16) {
+                        ck_assert_int_eq(o->kind, LSS_OUTCOME_CONFLICT);
+                        ck_assert_uint_eq(membus_find(b, &map[i].id)->st.active_node_id, 0xFF);
+                } else {
+                        ck_assert_msg(o->kind == LSS_OUTCOME_ASSIGNED, "entry %u: %s %s", i,
+                                      lss_outcome_name(o->kind), o->message);
+                        ck_assert_uint_eq(membus_find(b, &map[i].id)->st.active_node_id, map[i].node_id);
+                }
+        }
+        ck_assert_uint_eq(membus_find(b, &Z)->st.active_node_id, 16);
+        /* asked together, not one wait per device */
+        ck_assert_uint_ge(c.longest, 6);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* A dry run sends discovery only (no Configure, Store or NMT frame) and
  * says what a pass would do; the pass after it does exactly that. */
 typedef struct dry_count {
@@ -418,6 +480,7 @@ int main(void) {
         tcase_add_test(tc, mapped_32);
         tcase_add_test(tc, interrupted_pass_is_stored);
         tcase_add_test(tc, slow_devices_are_all_found);
+        tcase_add_test(tc, probes_together);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
