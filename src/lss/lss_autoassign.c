@@ -316,20 +316,29 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
         PT_END(&s->d_pc);
 }
 
-/* Map entries for the second look: not found, or silent halfway through
- * their assignment (their outcome is kept in s->first until they answer). */
+/* Map entries for the second look: not found, found by a scan but silent
+ * to the selective switch after it, or silent halfway through their
+ * assignment (their outcome is kept in s->first until they answer). */
 static size_t second_look_entries(lss_aa_state *s) {
         size_t n = 0;
         for (size_t i = 0; i < s->plan->n_map; i++) {
                 s->first[i].kind = LSS_OUTCOME_MISSING;
-                for (size_t k = 0; s->handled[i] && k < s->n_out; k++) {
+                for (size_t k = 0; s->handled[i] && k < s->n_out;) {
                         lss_outcome *o = &s->out[k];
-                        if (o->kind == LSS_OUTCOME_FAILED && o->status == LSS_E_NO_RESPONSE &&
-                            lookup(s->plan, &o->id) == (int) i) {
+                        if (lookup(s->plan, &o->id) != (int) i) {
+                                k++;
+                        } else if (o->kind == LSS_OUTCOME_FAILED && o->status == LSS_E_NO_RESPONSE) {
                                 s->first[i] = *o;
                                 o->kind = LSS_OUTCOME_MISSING; /* looked for again */
                                 s->handled[i] = false;
-                        }
+                                k++;
+                        } else if (o->kind == LSS_OUTCOME_MISSING && o->status == LSS_E_NOT_FOUND) {
+                                /* the second look says what became of it */
+                                memmove(o, o + 1, (s->n_out - k - 1) * sizeof(*o));
+                                s->n_out--;
+                                s->handled[i] = false;
+                        } else
+                                k++;
                 }
                 n += !s->handled[i];
         }
