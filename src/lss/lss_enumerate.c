@@ -93,7 +93,7 @@ int proc_confirm_found(lss_master *m, lss_scan_state *s) {
 
 /* With configured slaves kept in configuration an inquiry would have them
  * answer too: all back to waiting, and only F answers a selective switch. */
-static int confirm_by_selection(lss_master *m, lss_scan_state *s) {
+int proc_confirm_by_selection(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->cpc);
         s->selected = true;
         /* twice: a slave that loses it stays in configuration with F, with no
@@ -303,7 +303,7 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                  * whose answers to the inquiry came after their steps ended
                  * would take the temporary node-ID with F, and keep it. */
                 s->cpc = 0;
-                PT_CALL(&s->hpc, confirm_by_selection(m, s));
+                PT_CALL(&s->hpc, proc_confirm_by_selection(m, s));
         }
         if (s->confirm == CONFIRM_OK) {
                 REQUEST_RETRIED(m, &s->hpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),

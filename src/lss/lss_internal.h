@@ -276,6 +276,8 @@ int proc_probe(lss_master *m, lss_probe_state *s);
 /* enumerate.c: Inquire Identity of the slave in configuration against
  * s->found (s->confirm, s->other) */
 int proc_confirm_found(lss_master *m, lss_scan_state *s);
+/* everybody to waiting, then a selective switch to s->found (s->confirm) */
+int proc_confirm_by_selection(lss_master *m, lss_scan_state *s);
 int cand_add(lss_scan_state *s, const lss_identity *id);
 int proc_slowscan(lss_master *m, lss_scan_state *s);
 void lss_autoassign_free_state(lss_master *m);

@@ -429,6 +429,18 @@ static int proc_fastscan_top(lss_master *m) {
                         lss_identity_set_field(&m->sc.found, i, m->fs.value[i]);
                 m->sc.cpc = 0;
                 PT_CALL(&m->pc, proc_confirm_found(m, &m->sc));
+                m->sc.n_other = m->sc.confirm == CONFIRM_OTHER;
+                if (m->sc.confirm == CONFIRM_OTHER || m->sc.confirm == CONFIRM_UNCLEAR) {
+                        /* Another identity or several answered: two slaves in
+                         * configuration (one went there on a confirmation
+                         * answered late) do that too. Wait longer, everybody
+                         * to waiting, and ask for F alone. */
+                        lss_timing_on_stray(&m->timing);
+                        m->sc.cpc = 0;
+                        PT_CALL(&m->pc, proc_confirm_by_selection(m, &m->sc));
+                        if (m->sc.confirm == CONFIRM_NOBODY && m->sc.n_other)
+                                m->sc.confirm = CONFIRM_OTHER;
+                }
                 m->result.id = m->sc.found;
                 if (m->sc.confirm == CONFIRM_OK)
                         m->result.found = true;
@@ -440,8 +452,10 @@ static int proc_fastscan_top(lss_master *m) {
                 else if (m->sc.confirm == CONFIRM_OTHER) {
                         m->result.id = m->sc.other;
                         master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_FASTSCAN, LSS_REASON_NOT_CONFIRMED,
-                                    "slave %08x:%08x:%08x:%08x entered configuration state on a "
-                                    "Fastscan for %08x:%08x:%08x:%08x: it does not follow CiA 305",
+                                    "slave %08x:%08x:%08x:%08x was in configuration state after a "
+                                    "Fastscan for %08x:%08x:%08x:%08x, which did not answer a selective "
+                                    "switch: it entered configuration for another identity (it does not "
+                                    "follow CiA 305) or on an earlier Fastscan whose answer came late",
                                     m->sc.other.vendor, m->sc.other.product, m->sc.other.revision, m->sc.other.serial,
                                     m->sc.found.vendor, m->sc.found.product, m->sc.found.revision,
                                     m->sc.found.serial);
