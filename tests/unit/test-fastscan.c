@@ -30,6 +30,28 @@ START_TEST(fastscan_one) {
 }
 END_TEST
 
+/* A compliant slave left in configuration (it went there on an earlier
+ * Fastscan whose confirmation was answered late) answers Inquire Identity
+ * beside the one found: the raw Fastscan asks for the one found by
+ * selective switch after a switch to waiting, and finds it; before, the
+ * result was a Conflict. */
+START_TEST(fastscan_beside_one_in_configuration) {
+        lss_slave_faults f = faults_latency(1000, 200);
+        membus *b = bus_random(2, 8, 0, 0, &f);
+        membus_slave(b, 0)->st.configuration = true;
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_fastscan(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert(r->found);
+        ck_assert(lss_identity_equal(&r->id, &membus_slave(b, 1)->id));
+        ck_assert(membus_slave(b, 1)->st.configuration);
+        ck_assert(!membus_slave(b, 0)->st.configuration);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 START_TEST(fastscan_nobody) {
         membus *b = bus_random(0, 7, 0, 0, NULL);
         lss_master *m = master_default();
@@ -322,6 +344,7 @@ int main(void) {
         tcase_set_timeout(tc, 120);
         tcase_add_test(tc, fastscan_one);
         tcase_add_test(tc, fastscan_nobody);
+        tcase_add_test(tc, fastscan_beside_one_in_configuration);
         tcase_add_test(tc, fastscan_known_fields);
         tcase_add_test(tc, fastscan_wrong_known_value);
         tcase_add_test(tc, enumerate_1);
