@@ -5,6 +5,7 @@
 #include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "ctl/ctl.h"
 #include "ctl/ctl_errors.h"
@@ -14,6 +15,7 @@
 #include "ctl/ctl_parse.h"
 #include "ctl/ctl_show.h"
 #include "ctl/ctl_table.h"
+#include "lss/lss_proto.h"
 
 #define DEFAULT_SWITCH_DELAY_MS 100
 
@@ -231,6 +233,117 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
         ctl_table_free(t);
 }
 
+/* scan --as-config: one device of a map line, 0x%08x as lssd.conf(5) shows them */
+static void print_map_entry(const found *f, bool active, bool comma) {
+        printf("      %s{ vendor = 0x%08" PRIx32 "; product = 0x%08" PRIx32 "; revision = 0x%08" PRIx32
+               "; serial = 0x%08" PRIx32 "; node_id = ", active ? "" : "# ", f->id[0], f->id[1], f->id[2], f->id[3]);
+        if (f->new_id >= 1 && f->new_id <= 127)
+                printf("%u; }", f->new_id);
+        else
+                printf("N; }");
+        if (comma)
+                putchar(',');
+}
+
+static int compare_by_node_id(const void *a, const void *b) {
+        const found *x = *(const found *const *) a, *y = *(const found *const *) b;
+        if (x->new_id != y->new_id)
+                return x->new_id < y->new_id ? -1 : 1;
+        return memcmp(x->id, y->id, sizeof(x->id));
+}
+
+/* The found devices as the buses list of lssd.conf(5): each configured
+ * device a map entry at its node-ID, what cannot be one commented out. */
+static int print_config(ctl_context *c, const results *res, char **paths, char **ifnames, size_t n) {
+        const found **v = calloc(res->n ? res->n : 1, sizeof(*v));
+        size_t mapped = 0, left_out = 0;
+        char when[64] = "";
+        time_t now = time(NULL);
+        struct tm tm;
+
+        if (!v)
+                return ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
+        /* a device is mapped when its node-ID is 1..127 and no other device on its bus has it */
+        bool *ok = calloc(res->n ? res->n : 1, sizeof(*ok));
+        if (!ok) {
+                free(v);
+                return ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
+        }
+        for (size_t i = 0; i < res->n; i++) {
+                const found *f = &res->v[i];
+                ok[i] = f->new_id >= 1 && f->new_id <= 127;
+                for (size_t k = 0; k < res->n && ok[i]; k++)
+                        if (k != i && res->v[k].new_id == f->new_id && strcmp(res->v[k].ifname, f->ifname) == 0)
+                                ok[i] = false;
+                mapped += ok[i];
+                left_out += !ok[i];
+        }
+        if (gmtime_r(&now, &tm))
+                strftime(when, sizeof(when), "%Y-%m-%d %H:%M:%S UTC", &tm);
+
+        printf("# lssd.conf(5) buses as found by 'lssctl scan --as-config', %s, lssctl %s:\n", when, LSSCTL_VERSION);
+        printf("# %zu device%s mapped at %s current node-ID%s", mapped, mapped == 1 ? "" : "s",
+               mapped == 1 ? "its" : "their", mapped == 1 ? "" : "s");
+        if (left_out > 0)
+                printf(", %zu commented out (see there)", left_out);
+        printf(", on");
+        for (size_t b = 0; b < n; b++)
+                printf("%s %s", b == 0 ? "" : ",", ifnames[b]);
+        printf(".\n"
+               "# It replaces the buses = ( ... ); of /etc/lssd/lssd.conf, or extends it by\n"
+               "# the groups of the buses not there yet; the global settings there stay.\n"
+               "# Bus settings lssd does not publish (store, unknown, pool, nmt_stop,\n"
+               "# bitrate_change, vendor, product) are not here: copy them from the old file.\n"
+               "# Check the file with 'lssd --check-config FILE', then 'lssctl reload'.\n"
+               "buses = (\n");
+        for (size_t b = 0; b < n; b++) {
+                size_t nv = 0, last = SIZE_MAX;
+                uint32_t bitrate = 0;
+
+                for (size_t i = 0; i < res->n; i++)
+                        if (strcmp(res->v[i].ifname, ifnames[b]) == 0)
+                                v[nv++] = &res->v[i];
+                qsort(v, nv, sizeof(*v), compare_by_node_id);
+                for (size_t i = 0; i < nv; i++)
+                        if (ok[v[i] - res->v])
+                                last = i;
+
+                printf("  {\n    interface = \"%s\";\n", ifnames[b]);
+                if (sd_bus_get_property_trivial(c->bus, LSSD_BUS_NAME, paths[b], LSSD_BUS_IFACE, "Bitrate", NULL, 'u',
+                                                &bitrate) >= 0 &&
+                    lss_bit_timing_index(bitrate) >= 0)
+                        printf("    bitrate = %" PRIu32 ";\n", bitrate);
+                else
+                        printf("    # bitrate = ...;  lssd did not say this bus's bit rate: give it\n");
+                printf("    auto_assign = true;   # at start, every device below gets its node-ID\n"
+                       "    devices = (\n");
+                for (size_t i = 0; i < nv; i++) {
+                        const found *f = v[i];
+                        if (ok[f - res->v]) {
+                                print_map_entry(f, true, i < last);
+                                putchar('\n');
+                                continue;
+                        }
+                        print_map_entry(f, false, false);
+                        if (f->new_id == 0xFF)
+                                printf("  # non-configured (node-ID 255): give it a node-ID, then scan again\n");
+                        else if (f->new_id >= 1 && f->new_id <= 127) {
+                                printf("  # WARNING: node-ID %u is answered by two devices; should not happen: "
+                                       "give one another node-ID, then scan again\n", f->new_id);
+                                fprintf(stderr, "lssctl: %s: node-ID %u is answered by two devices, both commented "
+                                        "out: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32
+                                        ".\n", f->ifname, f->new_id, f->id[0], f->id[1], f->id[2], f->id[3]);
+                        } else
+                                printf("  # node-ID %u is not one a map takes (1..127)\n", f->new_id);
+                }
+                printf("    );\n  }%s\n", b + 1 < n ? "," : "");
+        }
+        printf(");\n");
+        free(ok);
+        free(v);
+        return 0;
+}
+
 /* scan and auto-assign: the same shape, on every bus (or the --bus one) */
 static int scan_like(ctl_context *c, bool assign) {
         const char *method = assign ? "AutoAssign" : "Scan";
@@ -308,8 +421,13 @@ static int scan_like(ctl_context *c, bool assign) {
         }
         if (assign)
                 mark_unknown_revisions(c, &res);
-        print_results(c, &res, assign);
         r = 0;
+        if (c->as_config)
+                r = print_config(c, &res, paths, ifnames, n);
+        else
+                print_results(c, &res, assign);
+        if (r < 0)
+                goto finish;
         if (res.partial) {
                 size_t bad = 0;
                 for (size_t i = 0; i < res.n; i++)

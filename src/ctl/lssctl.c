@@ -27,6 +27,7 @@ enum {
         OPT_QUIET = 1 << 10,
         OPT_DRY_RUN = 1 << 11,
         OPT_RESET = 1 << 12,
+        OPT_AS_CONFIG = 1 << 13,
 };
 
 typedef struct verb {
@@ -40,7 +41,8 @@ typedef struct verb {
 static const verb verbs[] = {
         { "status", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER, true, verb_status },
         { "list", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND, true, verb_list },
-        { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR, false, verb_scan },
+        { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR | OPT_AS_CONFIG, false,
+          verb_scan },
         { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false,
           verb_assign },
         { "unassign", 1, 1, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_RESET | OPT_QUIET, false, verb_unassign },
@@ -89,7 +91,8 @@ static void help(void) {
                "     --delay MS            Switch delay for set-bitrate (default 100)\n"
                "     --skip-missing        set-bitrate: go ahead without mapped devices the scan misses\n"
                "     --vendor ID --product ID\n"
-               "                           Also look for configured slaves of this pair (scan)\n\n"
+               "                           Also look for configured slaves of this pair (scan)\n"
+               "     --as-config           Print what scan found as the buses of lssd.conf(5), a map\n\n"
                "See the lssctl(1) man page for details and the exit codes.\n");
 }
 
@@ -107,6 +110,7 @@ enum {
         ARG_FORCE,
         ARG_DRY_RUN,
         ARG_RESET,
+        ARG_AS_CONFIG,
 };
 
 static const char *option_name(unsigned flag) {
@@ -124,6 +128,7 @@ static const char *option_name(unsigned flag) {
         case OPT_QUIET: return "--quiet";
         case OPT_DRY_RUN: return "--dry-run";
         case OPT_RESET: return "--reset";
+        case OPT_AS_CONFIG: return "--as-config";
         default: return "?";
         }
 }
@@ -155,6 +160,7 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 { "force", no_argument, NULL, ARG_FORCE },
                 { "dry-run", no_argument, NULL, ARG_DRY_RUN },
                 { "reset", no_argument, NULL, ARG_RESET },
+                { "as-config", no_argument, NULL, ARG_AS_CONFIG },
                 { "quiet", no_argument, NULL, 'q' },
                 {}
         };
@@ -229,6 +235,10 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 case ARG_RESET:
                         c->reset = true;
                         *given |= OPT_RESET;
+                        break;
+                case ARG_AS_CONFIG:
+                        c->as_config = true;
+                        *given |= OPT_AS_CONFIG;
                         break;
                 case 'q':
                         c->quiet = true;
@@ -316,11 +326,16 @@ int main(int argc, char *argv[]) {
                                            : ctl_usage(&c, "Too many arguments for '%s'.", v->name);
                 goto finish;
         }
-        for (unsigned flag = 1; flag <= OPT_RESET; flag <<= 1)
+        for (unsigned flag = 1; flag <= OPT_AS_CONFIG; flag <<= 1)
                 if ((given & flag) && !(v->options & flag)) {
                         r = ctl_usage(&c, "Option %s does not go with '%s'.", option_name(flag), v->name);
                         goto finish;
                 }
+        if (c.as_config && (c.json || c.no_legend)) {
+                r = ctl_usage(&c, "--as-config does not go with %s: it prints lssd.conf(5) text.",
+                              c.json ? "--json" : "--no-legend");
+                goto finish;
+        }
         if (c.has_vendor != c.has_product) {
                 r = ctl_usage(&c, "--vendor and --product go together.");
                 goto finish;

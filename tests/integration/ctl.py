@@ -260,6 +260,56 @@ def test_scan():
         ctl.fails('usage', '--vendor and --product go together', 'scan', '--vendor', '0x9A')
 
 
+def test_scan_config():
+    """scan --as-config (issue 18, commissioning): the bus as it is, printed as
+    the buses of lssd.conf(5), passes lssd --check-config, and lssd started
+    with it finds every device where the map wants it: AutoAssign reports all
+    unchanged and sends no Configure Node-ID or Store frame."""
+    configured = [Slave(0xEC, 0x1234, 0x00010002, 0x1001, 5), Slave(0xEC, 0x1234, 0x00010002, 0x1002, 6),
+                  Slave(0xEC, 0x1234, 0x00010003, 0x80001003, 7)]
+    fresh = Slave(0xEC, 0x1234, 0x00010002, 0x1004)
+    with Env({'vcan0': configured + [fresh]}, candump=True) as env:
+        ctl = Ctl(env)
+        ctl.fails('usage', '--as-config does not go with --json', 'scan', '--as-config', '--json')
+        ctl.fails('usage', "--as-config does not go with 'list'", 'list', '--as-config')
+        out = ctl.ok('scan', '--as-config', '--vendor', '0xEC', '--product', '0x1234').out
+        env.step('lssctl scan --as-config:\n' + out)
+        lines = out.splitlines()
+        expect(lines[0].startswith("# lssd.conf(5) buses as found by 'lssctl scan --as-config'"), 'header: %r' % out)
+        expect('3 devices mapped at their current node-IDs, 1 commented out (see there), on vcan0.' in out,
+               'header counts: %r' % out)
+        entry = '{ vendor = 0x%08x; product = 0x%08x; revision = 0x%08x; serial = 0x%08x; node_id = %s; }'
+        active = [x.strip().rstrip(',') for x in lines if x.strip().startswith('{ vendor')]
+        expect_eq(active, [entry % (s.identity + (s.node_id,)) for s in configured], 'one map line per device')
+        commented = [x.strip() for x in lines if x.strip().startswith('# { vendor')]
+        expect_eq(commented, ['# ' + entry % (fresh.identity + ('N',)) +
+                              '  # non-configured (node-ID 255): give it a node-ID, then scan again'],
+                  'the non-configured device, commented out')
+        expect('interface = "vcan0";' in out and 'bitrate = 125000;' in out, 'the bus: %r' % out)
+
+        path = os.path.join(env.dir, 'frozen.conf')
+        with open(path, 'w') as f:
+            f.write(out)
+        check = subprocess.run([os.environ.get('LSSD_BINARY', 'lssd'), '--check-config', path], capture_output=True,
+                               text=True)
+        expect_eq(check.returncode, 0, 'lssd --check-config on the printed map: %s%s' % (check.stdout, check.stderr))
+        expect('warning' not in (check.stdout + check.stderr).lower(), 'check-config warns: %r' % check.stderr)
+
+        # lssd with the printed map (the test's LSS timeout in front, as an
+        # installed file has its global settings): the bus already matches it
+        env.config = 'lss_timeout_ms = @TIMEOUT@;\n' + out
+        env.restart_lssd()
+        since = len(env.frames('vcan0')) if env.real else 0
+        got = ctl.ok('auto-assign', '--json').json
+        expect_eq(sorted((x['serial'], x['outcome'], x['new_node_id']) for x in got),
+                  sorted([(s.serial, 'unchanged', s.node_id) for s in configured] + [(fresh.serial, 'unknown', 255)]),
+                  'auto-assign with the printed map')
+        if env.real:
+            changing = [f for f in env.frames('vcan0')[since:] if f[1] == 0x7E5 and f[2][0] in (0x11, 0x17)]
+            expect_eq(changing, [], 'Configure Node-ID or Store frames of the auto-assign')
+            expect(any(f[1] == 0x7E5 for f in env.frames('vcan0')[since:]), 'the auto-assign was on the wire')
+
+
 def test_scan_two_buses():
     a, b = [Slave(0x9A, 3, 1, 0x10)], [Slave(0x9A, 3, 2, 0x20)]
     with Env({'vcan0': a, 'vcan1': b}) as env:
@@ -883,6 +933,7 @@ TESTS = {
     'status': test_status,
     'list': test_list,
     'scan': test_scan,
+    'scan-config': test_scan_config,
     'scan-two-buses': test_scan_two_buses,
     'assign': test_assign,
     'assign-taken': test_assign_taken,
