@@ -8,13 +8,17 @@
 #include <sys/epoll.h>
 #include <time.h>
 
-#include "daemon/lssd_bitrate.h"
+#include "can/rtnl_watch.h"
+#include "can/socketcan.h"
+#include "can/transport.h"
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_errors.h"
+#include "daemon/lssd_job_runners.h"
 #include "daemon/lssd_jobs.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_path.h"
-#include "daemon/lssd_ready.h"
+#include "daemon/lssd_heard.h"
+#include "daemon/lssd_simbus.h"
 #include "daemon/lssd_vtables.h"
 #include "lss/lss_proto.h"
 #include "util/time_util.h"
@@ -23,17 +27,72 @@
 #define RX_BATCH 64u
 /* how much earlier than its write an echo may read (clock conversion error), see bus_on_echo() */
 #define ECHO_CLOCK_SLACK_US 1000u
+/* Link events this long after our own retune are taken for it. */
+#define RETUNE_LINK_GRACE_US (5u * 1000000u)
+
+/* Bus PropertiesChanged bookkeeping. */
+#define LSSD_BUS_CHANGED_STATE        (1u << 0)
+#define LSSD_BUS_CHANGED_BITRATE      (1u << 1)
+#define LSSD_BUS_CHANGED_JOB          (1u << 2)
+#define LSSD_BUS_CHANGED_PROGRESS     (1u << 3)
+#define LSSD_BUS_CHANGED_QUEUE_LENGTH (1u << 4)
+#define LSSD_BUS_CHANGED_LAST_PASS    (1u << 5)
+
+struct lssd_bus {
+        lssd_bus_host host;              /* the daemon around it */
+        lssd_job_env env;                /* what the job runners see (points into this bus) */
+        char *ifname;
+        char *path;
+        lssd_bus_config *config;         /* own copy: a bus being removed outlives its configuration */
+
+        lss_transport transport;
+        socketcan_port *port;            /* behind transport, NULL when simulated */
+        lssd_simbus *sim;                /* behind transport when simulated */
+        sd_event_source *io_source;
+        int io_fd;
+        sd_event_source *timer_source;
+        lss_link_state link;
+        lss_bus_state bus_state;
+        uint64_t rx_dropped;
+        uint32_t link_bitrate;           /* from rtnetlink for real controllers, 0 otherwise */
+        bool link_virtual;               /* vcan/vxcan: frames take no time on the "wire" */
+        bool link_changed;               /* socketcan reported a change: handle it outside the callback */
+
+        lss_master *engine;
+        bool engine_running;             /* we started an operation and did not collect it yet */
+        lss_frame echo_want;             /* last LSS request written: its echo confirms it is on the wire */
+        uint64_t echo_want_at;           /* when it was written */
+        bool echo_pending;
+
+        lssd_job_queue queue;
+        lssd_job *job;                   /* running */
+        double progress;
+
+        sd_bus_track *holder;            /* Acquire() */
+        char *holder_name;
+
+        lssd_devices devices;            /* the registry */
+
+        sd_bus_slot *slot;
+        const char *state;               /* as published */
+        uint32_t bitrate;                /* as published */
+        uint32_t bitrate_set;            /* by SetBitrate: outlives reloads of the file's value; 0 none */
+        unsigned changed;                /* LSSD_BUS_CHANGED_* not yet signalled */
+        bool processing;                 /* bus_process() is on the stack */
+        bool removing;                   /* dropped from the configuration: free when idle */
+        sd_event_source *remove_source;  /* frees the bus outside of its own callbacks */
+
+        char *boot_status;               /* how the boot pass ended, for STATUS= */
+        lssd_heard heard;                /* node-IDs other devices speak under */
+};
 
 static void bus_process(lssd_bus *b);
 static void bus_update_io(lssd_bus *b, bool force);
+static bool bus_retune(lssd_bus *b);
 static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata);
 
-uint64_t lssd_bus_now(lssd_bus *b) {
+static uint64_t lssd_bus_now(lssd_bus *b) {
         return lss_transport_now(&b->transport);
-}
-
-uint64_t lssd_realtime_us(void) {
-        return clock_now_us(CLOCK_REALTIME);
 }
 
 static lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
@@ -119,7 +178,7 @@ static void bus_update_published(lssd_bus *b) {
                 b->state = s;
                 b->changed |= LSSD_BUS_CHANGED_STATE;
                 if (trouble && !b->removing)
-                        lssd_ready_status(b->ctx, false);
+                        b->host.ops->status_changed(b->host.userdata);
         }
         uint32_t rate = lssd_bus_bitrate(b);
         if (rate != b->bitrate) {
@@ -132,7 +191,7 @@ static void lssd_bus_flush_changes(lssd_bus *b) {
         char *names[7];
         size_t n = 0;
 
-        if (!b->changed || !b->ctx->bus || !b->slot)
+        if (!b->changed || !b->host.dbus || !b->slot)
                 return;
         if (b->changed & LSSD_BUS_CHANGED_STATE)
                 names[n++] = (char *) "State";
@@ -148,7 +207,7 @@ static void lssd_bus_flush_changes(lssd_bus *b) {
                 names[n++] = (char *) "LastPass";
         names[n] = NULL;
         b->changed = 0;
-        int r = sd_bus_emit_properties_changed_strv(b->ctx->bus, b->path, LSSD_BUS_IFACE, names);
+        int r = sd_bus_emit_properties_changed_strv(b->host.dbus, b->path, LSSD_BUS_IFACE, names);
         if (r < 0)
                 log_debug("%s: failed to emit PropertiesChanged: %s", b->ifname, strerror(-r));
 }
@@ -182,7 +241,7 @@ static void on_engine_found(void *userdata, const lss_device *d) {
         lssd_bus *b = userdata;
         /* Scan announces devices; the scans inside AutoAssign and SetBitrate do not */
         if (b->job && b->job->type == LSSD_JOB_SCAN)
-                lssd_scan_found(b, b->job, d);
+                lssd_scan_found(&b->env, b->job, d);
 }
 
 /* ---- driving the engine ---- */
@@ -287,18 +346,18 @@ static void bus_job_end(lssd_bus *b) {
                         text = NULL;
                 free(b->boot_status);
                 b->boot_status = text;
-                b->boot_pending = false;
-                lssd_ready_boot_pass_done(b->ctx);
+                b->env.boot_pending = false;
+                b->host.ops->boot_pass_done(b->host.userdata);
         }
         /* the boot pass has no caller but its end matters to everybody */
-        if ((j->request || j->type == LSSD_JOB_AUTO_ASSIGN) && b->ctx->bus && b->slot)
-                (void) sd_bus_emit_signal(b->ctx->bus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss", lssd_job_name(j),
+        if ((j->request || j->type == LSSD_JOB_AUTO_ASSIGN) && b->host.dbus && b->slot)
+                (void) sd_bus_emit_signal(b->host.dbus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss", lssd_job_name(j),
                                           j->result ? j->result : "failed");
         lssd_job_free(j);
 }
 
 static void bus_job_continue(lssd_bus *b, const lss_result *r) {
-        int k = lssd_job_run(b, b->job, r);
+        int k = lssd_job_run(&b->env, b->job, r);
         if (k > 0)
                 b->engine_running = true;
         else
@@ -315,7 +374,7 @@ static void bus_job_begin(lssd_bus *b, lssd_job *j) {
 
 static int on_remove(sd_event_source *s, void *userdata) {
         lssd_bus *b = userdata;
-        lssd_context_bus_removed(b->ctx, b);
+        b->host.ops->removed(b->host.userdata, b);
         return 0;
 }
 
@@ -329,7 +388,7 @@ static void bus_process(lssd_bus *b) {
                 bus_flush_tx(b);
                 /* SetBitrate: the engine is silent and waits for the host interface */
                 if (b->engine_running && lss_master_retune_wanted(b->engine, NULL, NULL)) {
-                        if (lssd_bitrate_retune(b))
+                        if (bus_retune(b))
                                 bus_update_io(b, true);
                         continue;
                 }
@@ -352,12 +411,11 @@ static void bus_process(lssd_bus *b) {
 
         if (lssd_bus_idle(b)) {
                 if (b->removing && !b->remove_source) {
-                        int r = sd_event_add_defer(b->ctx->event, &b->remove_source, on_remove, b);
+                        int r = sd_event_add_defer(b->host.event, &b->remove_source, on_remove, b);
                         if (r < 0)
                                 log_error("%s: failed to schedule removal: %s", b->ifname, strerror(-r));
                 }
-                if (b->ctx->stopping)
-                        lssd_context_check_stopped(b->ctx);
+                b->host.ops->idle(b->host.userdata);
         }
 }
 
@@ -377,8 +435,8 @@ static void bus_on_echo(lssd_bus *b, const lss_frame *f, uint64_t rx) {
 
 static void bus_note_bootup(lssd_bus *b, const lss_frame *f, uint64_t rx) {
         uint8_t node, state;
-        if (rx <= b->unstored_until && bootup_decode(f, &node, &state) && state == 0)
-                b->unstored[node] = true;
+        if (rx <= b->env.unstored_until && bootup_decode(f, &node, &state) && state == 0)
+                b->env.unstored[node] = true;
 }
 
 static void bus_poll_rx(lssd_bus *b) {
@@ -432,7 +490,7 @@ static void bus_update_io(lssd_bus *b, bool force) {
         b->io_fd = -1;
         if (fd < 0)
                 return;
-        int r = sd_event_add_io(b->ctx->event, &b->io_source, fd, EPOLLIN, on_io, b);
+        int r = sd_event_add_io(b->host.event, &b->io_source, fd, EPOLLIN, on_io, b);
         if (r < 0) {
                 log_error("%s: failed to watch the socket: %s", b->ifname, strerror(-r));
                 return;
@@ -465,7 +523,7 @@ static bool is_holder(const lssd_bus *b, const char *sender) {
 }
 
 int lssd_bus_check_available(lssd_bus *b, const char *sender, bool raw, sd_bus_error *error) {
-        if (b->ctx->stopping || b->removing)
+        if (b->host.ops->stopping(b->host.userdata) || b->removing)
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s: lssd is stopping serving this bus", b->ifname);
         if (b->holder_name && !is_holder(b, sender))
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s (Acquire)", b->ifname,
@@ -492,7 +550,7 @@ static void bus_queue_reset(lssd_bus *b, bool front) {
                 log_error("%s: out of memory queueing the switch to waiting", b->ifname);
                 return;
         }
-        j->id = ++b->ctx->next_job_id;
+        j->id = b->host.ops->next_job_id(b->host.userdata);
         if (front)
                 lssd_job_queue_push_front(&b->queue, j);
         else
@@ -504,7 +562,7 @@ static void bus_queue_reset(lssd_bus *b, bool front) {
 static void bus_queue_boot_pass(lssd_bus *b) {
         lssd_job *j, *reset;
 
-        if (!b->boot_pending || b->removing || b->ctx->stopping)
+        if (!b->env.boot_pending || b->removing || b->host.ops->stopping(b->host.userdata))
                 return;
         for (j = b->job; j; j = NULL)
                 if (j->type == LSSD_JOB_AUTO_ASSIGN && j->boot)
@@ -515,11 +573,11 @@ static void bus_queue_boot_pass(lssd_bus *b) {
         if (lssd_job_new(LSSD_JOB_AUTO_ASSIGN, NULL, &j) < 0 || lssd_job_set_plan(j, b->config) < 0) {
                 lssd_job_free(j);
                 log_error("%s: out of memory queueing the auto-assign pass", b->ifname);
-                b->boot_pending = false;
+                b->env.boot_pending = false;
                 return;
         }
         j->boot = true;
-        j->id = ++b->ctx->next_job_id;
+        j->id = b->host.ops->next_job_id(b->host.userdata);
         reset = b->queue.head && b->queue.head->type == LSSD_JOB_RESET ? lssd_job_queue_pop(&b->queue) : NULL;
         lssd_job_queue_push_front(&b->queue, j);
         if (reset)
@@ -531,10 +589,21 @@ int lssd_bus_submit(lssd_bus *b, lssd_job *j, sd_bus_error *error) {
         if (lssd_job_queue_push(&b->queue, j, false) < 0)
                 return sd_bus_error_setf(error, LSSD_ERROR_LIMITS_EXCEEDED,
                                          "%s: %zu jobs are queued already, try again later", b->ifname, b->queue.n);
-        j->id = ++b->ctx->next_job_id;
+        j->id = b->host.ops->next_job_id(b->host.userdata);
         b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
         bus_process(b);
         return 0;
+}
+
+int lssd_bus_queue_job(lssd_bus *b, sd_bus_message *m, lssd_job *j, bool raw, sd_bus_error *error) {
+        int r = lssd_bus_check_available(b, sd_bus_message_get_sender(m), raw, error);
+        if (r >= 0)
+                r = lssd_bus_submit(b, j, error);
+        if (r < 0) {
+                lssd_job_free(j);
+                return r;
+        }
+        return 1; /* the job answers */
 }
 
 /* ---- holder ---- */
@@ -567,7 +636,7 @@ int lssd_bus_acquire(lssd_bus *b, sd_bus_message *m, sd_bus_error *error) {
                 return sd_bus_error_set(error, SD_BUS_ERROR_ACCESS_DENIED, "Acquire() needs a bus connection");
         if (is_holder(b, sender))
                 return 0;
-        if (b->ctx->stopping || b->removing)
+        if (b->host.ops->stopping(b->host.userdata) || b->removing)
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s: lssd is stopping serving this bus", b->ifname);
         if (b->holder_name)
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s already", b->ifname,
@@ -608,7 +677,7 @@ int lssd_bus_cancel(lssd_bus *b, const char *sender, sd_bus_error *error) {
         if (b->holder_name && !is_holder(b, sender))
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s (Acquire)", b->ifname,
                                          b->holder_name);
-        if (lssd_bitrate_uncancellable(b))
+        if ((b->engine_running && lssd_job_uncancellable(b->job)))
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY,
                                          "%s: the bit-rate change is under way and cannot be cancelled (devices "
                                          "would keep a pending rate or the bus stay split); it ends soon",
@@ -620,6 +689,61 @@ int lssd_bus_cancel(lssd_bus *b, const char *sender, sd_bus_error *error) {
 }
 
 /* ---- link ---- */
+
+/* SetBitrate: the engine is silent and waits for the host interface to be
+ * retuned: do it (rtnetlink on a real controller, the simulated bus with
+ * --simulate; skipped on vcan) and tell the engine. Returns true when the
+ * socket changed. */
+static bool bus_retune(lssd_bus *b) {
+        lssd_job *j = b->job;
+        enum lss_retune how = LSS_RETUNE_FAILED;
+        uint32_t rate;
+        uint64_t deadline, now, done;
+        bool reopened = false;
+        int r;
+
+        if (!lss_master_retune_wanted(b->engine, &rate, &deadline))
+                return false;
+        now = lssd_bus_now(b);
+        if (!j || j->type != LSSD_JOB_SET_BITRATE || !b->config->bitrate_change) {
+                if (j)
+                        j->retune_error = EPERM;
+        } else if (b->sim) {
+                lssd_simbus_set_bitrate(b->sim, rate);
+                how = LSS_RETUNE_DONE;
+        } else if (b->link_virtual) {
+                how = LSS_RETUNE_SKIPPED;
+        } else {
+                j->retune_until = now + RETUNE_LINK_GRACE_US;
+                r = rtnl_set_can_bitrate(NULL, b->ifname, rate);
+                if (r == 0) {
+                        how = LSS_RETUNE_DONE;
+                        /* the old socket carries a pending ENETDOWN from the link going down */
+                        if (b->port) {
+                                r = socketcan_port_reopen(b->port);
+                                if (r < 0)
+                                        log_warning("%s: re-opening after the retune failed: %s", b->ifname,
+                                                    strerror(-r));
+                                reopened = true;
+                        }
+                } else if (r == -EOPNOTSUPP) {
+                        how = LSS_RETUNE_SKIPPED;
+                } else {
+                        j->retune_error = -r;
+                        log_error("%s: retuning the interface to %u bit/s failed: %s%s", b->ifname, rate,
+                                  strerror(-r), r == -EPERM ? " (lssd needs CAP_NET_ADMIN for bit-rate changes: "
+                                                              "see the lssd-bitrate.conf drop-in)" : "");
+                }
+        }
+        done = lssd_bus_now(b);
+        if (how == LSS_RETUNE_DONE && done > deadline)
+                log_warning("%s: the interface was retuned %llu us after the slaves switched", b->ifname,
+                            (unsigned long long) (done - deadline));
+        log_info("%s: SetBitrate: host interface retune: %s (%llu us)", b->ifname, lss_retune_name(how),
+                 (unsigned long long) (done - now));
+        lss_master_retune_done(b->engine, how, done);
+        return reopened;
+}
 
 static void on_link_state(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata) {
         lssd_bus *b = userdata;
@@ -639,7 +763,7 @@ static void bus_after_link_change(lssd_bus *b) {
         if (old == now_state)
                 return;
 
-        if (lssd_bitrate_retuning(b)) {
+        if (lssd_job_retuning(b->job, lssd_bus_now(b))) {
                 /* our own retune (down, bit timing, up): the job goes on */
                 log_info("%s: link %s (SetBitrate retune)", b->ifname, lss_link_state_to_string(now_state));
                 bus_process(b);
@@ -691,8 +815,8 @@ void lssd_bus_stop(lssd_bus *b, const char *why) {
         while ((j = lssd_job_queue_pop(&b->queue))) {
                 if (j->request) {
                         lssd_job_abort(j, LSSD_ERROR_CANCELLED, why);
-                        if (b->ctx->bus && b->slot)
-                                (void) sd_bus_emit_signal(b->ctx->bus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss",
+                        if (b->host.dbus && b->slot)
+                                (void) sd_bus_emit_signal(b->host.dbus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss",
                                                           lssd_job_name(j), "cancelled");
                 }
                 lssd_job_free(j);
@@ -706,7 +830,7 @@ void lssd_bus_stop(lssd_bus *b, const char *why) {
         }
         /* a bit-rate change runs to its end (seconds): cut off it could
          * leave devices with a pending rate or the bus split */
-        if (b->engine_running && !lssd_bitrate_uncancellable(b)) {
+        if (b->engine_running && !lssd_job_uncancellable(b->job)) {
                 log_info("%s: cancelling %s: %s", b->ifname, lssd_job_name(b->job), why);
                 lss_master_cancel(b->engine, lssd_bus_now(b));
         }
@@ -715,116 +839,147 @@ void lssd_bus_stop(lssd_bus *b, const char *why) {
         bus_process(b);
 }
 
-/* ---- devices ---- */
+/* ---- devices: the registry publishes on D-Bus ---- */
 
-lssd_device *lssd_bus_find_device(lssd_bus *b, const lss_identity *id) {
-        for (lssd_device *d = b->devices; d; d = d->next)
-                if (lss_identity_equal(&d->id, id))
-                        return d;
-        return NULL;
-}
-
-lssd_device *lssd_bus_device_with_node_id(lssd_bus *b, uint8_t node_id, const lss_identity *except) {
-        if (!lss_node_id_valid(node_id))
-                return NULL;
-        for (lssd_device *d = b->devices; d; d = d->next)
-                if (!d->missing && d->node_id == node_id && !(except && lss_identity_equal(&d->id, except)))
-                        return d;
-        return NULL;
-}
-
-static uint8_t mapped_node_id(const lssd_bus *b, const lss_identity *id) {
-        const lssd_device_config *c = lssd_config_lookup_device(b->config, id);
-        return c ? c->node_id : 0;
-}
-
-static const char *device_state(lssd_bus *b, const lssd_device *d) {
-        bool conflict = lssd_bus_device_with_node_id(b, d->node_id, &d->id) != NULL;
-        /* not given its node-ID because another device answers to it: say so even while non-configured */
-        if (d->blocked && !d->missing)
-                return "conflict";
-        return lssd_device_state(d->node_id, d->mapped_node_id, d->missing, conflict, d->assigned, d->pooled);
-}
-
-int lssd_bus_get_device(lssd_bus *b, const lss_identity *id, uint8_t node_id, lssd_device **ret) {
-        return lssd_bus_get_device_full(b, id, true, node_id, ret);
-}
-
-int lssd_bus_get_device_full(lssd_bus *b, const lss_identity *id, bool revision_known, uint8_t node_id,
-                             lssd_device **ret) {
-        lssd_device *d = lssd_bus_find_device(b, id);
-        int r;
-
-        if (d) {
-                *ret = d;
+static int devices_add(void *userdata, lssd_device *d) {
+        lssd_bus *b = userdata;
+        if (!b->host.dbus)
                 return 0;
-        }
-        r = lssd_device_new(b, b->ifname, id, &d);
-        if (r < 0)
-                return r;
-        d->revision_unknown = !revision_known; /* before the object is announced: RevisionKnown is const */
-        d->node_id = node_id;
-        d->mapped_node_id = mapped_node_id(b, id);
-        d->last_seen = lssd_realtime_us();
-        if (b->ctx->bus) {
-                r = sd_bus_add_object_vtable(b->ctx->bus, &d->slot, d->path, LSSD_DEVICE_IFACE, lssd_device_vtable,
-                                             d);
-                if (r < 0) {
-                        lssd_device_free(d);
-                        return r;
-                }
-        }
-        /* append: objects keep the order they were found in */
-        lssd_device **tail = &b->devices;
-        while (*tail)
-                tail = &(*tail)->next;
-        *tail = d;
-        b->n_devices++;
-        d->state = device_state(b, d);
-        if (b->ctx->bus) {
-                r = sd_bus_emit_object_added(b->ctx->bus, d->path);
-                if (r < 0)
-                        log_debug("%s: failed to announce %s: %s", b->ifname, d->path, strerror(-r));
-        }
-        /* a new device can put others in conflict */
-        lssd_bus_refresh_devices(b);
-        *ret = d;
-        return 1;
+        return sd_bus_add_object_vtable(b->host.dbus, &d->slot, d->path, LSSD_DEVICE_IFACE, lssd_device_vtable, d);
 }
 
-void lssd_bus_refresh_devices(lssd_bus *b) {
-        for (lssd_device *d = b->devices; d; d = d->next) {
-                uint8_t mapped = mapped_node_id(b, &d->id);
-                if (mapped != d->mapped_node_id) {
-                        d->mapped_node_id = mapped;
-                        d->changed |= LSSD_DEVICE_CHANGED_MAPPED_NODE_ID;
-                }
-        }
-        for (lssd_device *d = b->devices; d; d = d->next) {
-                const char *s = device_state(b, d);
-                if (strcmp(s, d->state) != 0) {
-                        d->state = s;
-                        d->changed |= LSSD_DEVICE_CHANGED_STATE;
-                }
-        }
-        for (lssd_device *d = b->devices; d; d = d->next) {
-                char *names[5];
-                size_t n = 0;
-                if (!d->changed)
-                        continue;
-                if (d->changed & LSSD_DEVICE_CHANGED_NODE_ID)
-                        names[n++] = (char *) "NodeId";
-                if (d->changed & LSSD_DEVICE_CHANGED_MAPPED_NODE_ID)
-                        names[n++] = (char *) "MappedNodeId";
-                if (d->changed & LSSD_DEVICE_CHANGED_STATE)
-                        names[n++] = (char *) "State";
-                if (d->changed & LSSD_DEVICE_CHANGED_LAST_SEEN)
-                        names[n++] = (char *) "LastSeen";
-                names[n] = NULL;
-                d->changed = 0;
-                if (b->ctx->bus && d->slot)
-                        (void) sd_bus_emit_properties_changed_strv(b->ctx->bus, d->path, LSSD_DEVICE_IFACE, names);
-        }
+static void devices_added(void *userdata, lssd_device *d) {
+        lssd_bus *b = userdata;
+        if (!b->host.dbus)
+                return;
+        int r = sd_bus_emit_object_added(b->host.dbus, d->path);
+        if (r < 0)
+                log_debug("%s: failed to announce %s: %s", b->ifname, d->path, strerror(-r));
+}
+
+static void devices_changed(void *userdata, lssd_device *d, char **names) {
+        lssd_bus *b = userdata;
+        if (b->host.dbus && d->slot)
+                (void) sd_bus_emit_properties_changed_strv(b->host.dbus, d->path, LSSD_DEVICE_IFACE, names);
+}
+
+static void devices_removed(void *userdata, lssd_device *d) {
+        lssd_bus *b = userdata;
+        if (b->host.dbus && d->slot)
+                (void) sd_bus_emit_object_removed(b->host.dbus, d->path);
+}
+
+static const lssd_devices_ops devices_ops = {
+        .add = devices_add,
+        .added = devices_added,
+        .changed = devices_changed,
+        .removed = devices_removed,
+};
+
+/* ---- what the job runners see ---- */
+
+static uint64_t env_now(void *userdata) {
+        return lssd_bus_now(userdata);
+}
+
+static uint32_t env_bitrate(void *userdata) {
+        return lssd_bus_bitrate(userdata);
+}
+
+static const char *env_holder(void *userdata) {
+        const lssd_bus *b = userdata;
+        return b->holder_name;
+}
+
+static void env_host_link(void *userdata, lssd_host_link *ret) {
+        const lssd_bus *b = userdata;
+        *ret = (lssd_host_link) {
+                .ifname = b->ifname,
+                .link = b->link,
+                .bus_state = b->bus_state,
+                .simulated = b->sim != NULL,
+                .virtual_link = b->link_virtual,
+                .bitrate = lssd_bus_bitrate(b),
+        };
+}
+
+static void env_set_bitrate(void *userdata, uint32_t bitrate) {
+        lssd_bus_set_bitrate(userdata, bitrate);
+}
+
+static void env_last_pass_changed(void *userdata) {
+        lssd_bus *b = userdata;
+        b->changed |= LSSD_BUS_CHANGED_LAST_PASS;
+}
+
+static const lssd_job_env_ops env_ops = {
+        .now = env_now,
+        .bitrate = env_bitrate,
+        .holder = env_holder,
+        .host_link = env_host_link,
+        .set_bitrate = env_set_bitrate,
+        .last_pass_changed = env_last_pass_changed,
+};
+
+/* ---- what other files may read ---- */
+
+const char *lssd_bus_ifname(const lssd_bus *b) {
+        return b->ifname;
+}
+
+const char *lssd_bus_object_path(const lssd_bus *b) {
+        return b->path;
+}
+
+const lssd_bus_config *lssd_bus_config_of(const lssd_bus *b) {
+        return b->config;
+}
+
+lssd_auth *lssd_bus_auth(lssd_bus *b) {
+        return b->host.auth;
+}
+
+lssd_devices *lssd_bus_devices(lssd_bus *b) {
+        return &b->devices;
+}
+
+lssd_job_env *lssd_bus_job_env(lssd_bus *b) {
+        return &b->env;
+}
+
+const lssd_job *lssd_bus_running_job(const lssd_bus *b) {
+        return b->job;
+}
+
+size_t lssd_bus_queue_length(const lssd_bus *b) {
+        return b->queue.n;
+}
+
+double lssd_bus_progress(const lssd_bus *b) {
+        return b->progress;
+}
+
+const char *lssd_bus_holder(const lssd_bus *b) {
+        return b->holder_name;
+}
+
+bool lssd_bus_removing(const lssd_bus *b) {
+        return b->removing;
+}
+
+void lssd_bus_set_removing(lssd_bus *b, bool removing) {
+        b->removing = removing;
+}
+
+void lssd_bus_boot_get(const lssd_bus *b, lssd_bus_boot *ret) {
+        *ret = (lssd_bus_boot) {
+                .pending = b->env.boot_pending,
+                .link = b->link,
+                .status = b->boot_status,
+                .pass_started_us = b->env.pass_started_us,
+                .engine_steps = lss_master_get_stats(b->engine)->steps,
+                .lss_timeout_ms = b->config->lss_timeout_ms,
+        };
 }
 
 /* ---- life cycle ---- */
@@ -832,12 +987,12 @@ void lssd_bus_refresh_devices(lssd_bus *b) {
 static int bus_open_transport(lssd_bus *b) {
         int r;
 
-        if (b->ctx->args.simulate) {
+        if (b->host.args->simulate) {
                 r = lssd_simbus_new(b->config->bitrate, &b->sim);
                 if (r < 0)
                         return r;
-                for (size_t i = 0; i < b->ctx->args.n_sim_slaves; i++) {
-                        const lssd_sim_slave *s = &b->ctx->args.sim_slaves[i];
+                for (size_t i = 0; i < b->host.args->n_sim_slaves; i++) {
+                        const lssd_sim_slave *s = &b->host.args->sim_slaves[i];
                         if (strcmp(s->ifname, b->ifname) != 0)
                                 continue;
                         r = lssd_simbus_add_slave(b->sim, &s->id, s->node_id);
@@ -861,7 +1016,7 @@ static int bus_open_transport(lssd_bus *b) {
         return 0;
 }
 
-int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **ret) {
+int lssd_bus_new(const lssd_bus_host *host, const lssd_bus_config *config, lssd_bus **ret) {
         lss_timing_config tc;
         lssd_bus *b;
         int r;
@@ -869,14 +1024,14 @@ int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **re
         b = calloc(1, sizeof(*b));
         if (!b)
                 return -ENOMEM;
-        b->ctx = ctx;
+        b->host = *host;
         b->io_fd = -1;
         b->config = lssd_bus_config_dup(config);
         if (!b->config) {
                 free(b);
                 return -ENOMEM;
         }
-        lssd_job_queue_init(&b->queue, ctx->args.queue_max);
+        lssd_job_queue_init(&b->queue, host->args->queue_max);
 
         b->ifname = strdup(config->interface);
         if (!b->ifname) {
@@ -893,6 +1048,19 @@ int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **re
                 r = -ENOMEM;
                 goto fail;
         }
+        lssd_devices_init(&b->devices, b, b->ifname, &devices_ops, b);
+        lssd_devices_set_config(&b->devices, b->config);
+        b->env = (lssd_job_env) {
+                .ifname = b->ifname,
+                .path = b->path,
+                .dbus = host->dbus,
+                .engine = b->engine,
+                .config = b->config,
+                .devices = &b->devices,
+                .heard = &b->heard,
+                .ops = &env_ops,
+                .userdata = b,
+        };
         lss_master_set_progress(b->engine, on_engine_progress, b);
         lss_master_set_found(b->engine, on_engine_found, b);
 
@@ -902,14 +1070,14 @@ int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **re
                 goto fail;
         }
 
-        r = sd_event_add_time(ctx->event, &b->timer_source, CLOCK_MONOTONIC, UINT64_MAX, 1, on_timer, b);
+        r = sd_event_add_time(b->host.event, &b->timer_source, CLOCK_MONOTONIC, UINT64_MAX, 1, on_timer, b);
         if (r < 0)
                 goto fail;
         (void) sd_event_source_set_enabled(b->timer_source, SD_EVENT_OFF);
         bus_update_io(b, true);
 
-        if (ctx->bus) {
-                r = sd_bus_add_object_vtable(ctx->bus, &b->slot, b->path, LSSD_BUS_IFACE, lssd_bus_vtable, b);
+        if (host->dbus) {
+                r = sd_bus_add_object_vtable(host->dbus, &b->slot, b->path, LSSD_BUS_IFACE, lssd_bus_vtable, b);
                 if (r < 0)
                         goto fail;
         }
@@ -932,7 +1100,7 @@ int lssd_bus_new(lssd_context *ctx, const lssd_bus_config *config, lssd_bus **re
         if (b->link == LSS_LINK_UP)
                 bus_queue_reset(b, false);
         /* a bus that is not there yet gets its pass when the interface appears */
-        b->boot_pending = config->auto_assign && !ctx->started;
+        b->env.boot_pending = config->auto_assign && !host->ops->started(host->userdata);
         if (b->link == LSS_LINK_UP)
                 bus_queue_boot_pass(b);
 
@@ -952,13 +1120,15 @@ void lssd_bus_set_config(lssd_bus *b, const lssd_bus_config *config) {
         }
         lssd_bus_config_free(b->config);
         b->config = c;
+        b->env.config = c;
+        lssd_devices_set_config(&b->devices, c);
         if (b->bitrate_set && c->bitrate != b->bitrate_set) {
                 log_notice("%s: keeping %u bit/s set by SetBitrate (the configuration says %u until lssd restarts)",
                            b->ifname, b->bitrate_set, c->bitrate);
                 c->bitrate = b->bitrate_set;
         }
         bus_update_timing(b);
-        lssd_bus_refresh_devices(b);
+        lssd_devices_refresh(&b->devices);
         bus_update_published(b);
         lssd_bus_flush_changes(b);
 }
@@ -973,8 +1143,8 @@ void lssd_bus_set_bitrate(lssd_bus *b, uint32_t bitrate) {
 
 /* Kicks off the queued first frames once everything is registered. */
 void lssd_bus_start(lssd_bus *b, bool announce) {
-        if (announce && b->ctx->bus && b->slot) {
-                int r = sd_bus_emit_object_added(b->ctx->bus, b->path);
+        if (announce && b->host.dbus && b->slot) {
+                int r = sd_bus_emit_object_added(b->host.dbus, b->path);
                 if (r < 0)
                         log_debug("%s: failed to announce the bus: %s", b->ifname, strerror(-r));
         }
@@ -998,15 +1168,9 @@ lssd_bus *lssd_bus_free(lssd_bus *b) {
                 b->job = lssd_job_free(b->job);
         }
 
-        while (b->devices) {
-                lssd_device *d = b->devices;
-                b->devices = d->next;
-                if (b->ctx->bus && d->slot)
-                        (void) sd_bus_emit_object_removed(b->ctx->bus, d->path);
-                lssd_device_free(d);
-        }
-        if (b->ctx->bus && b->slot)
-                (void) sd_bus_emit_object_removed(b->ctx->bus, b->path);
+        lssd_devices_clear(&b->devices);
+        if (b->host.dbus && b->slot)
+                (void) sd_bus_emit_object_removed(b->host.dbus, b->path);
         b->slot = sd_bus_slot_unref(b->slot);
 
         b->holder = sd_bus_track_unref(b->holder);

@@ -109,13 +109,66 @@ static void log_diag(const lssd_diag *d) {
                 log_warning("(%zu more configuration messages not shown)", d->n_dropped);
 }
 
+/* ---- what the buses need of the context ---- */
+
+static uint64_t host_next_job_id(void *userdata) {
+        lssd_context *ctx = userdata;
+        return ++ctx->next_job_id;
+}
+
+static bool host_stopping(void *userdata) {
+        const lssd_context *ctx = userdata;
+        return ctx->stopping;
+}
+
+static bool host_started(void *userdata) {
+        const lssd_context *ctx = userdata;
+        return ctx->started;
+}
+
+static void host_status_changed(void *userdata) {
+        lssd_ready_status(userdata, false);
+}
+
+static void host_boot_pass_done(void *userdata) {
+        lssd_ready_boot_pass_done(userdata);
+}
+
+static void host_removed(void *userdata, lssd_bus *b) {
+        lssd_context_bus_removed(userdata, b);
+}
+
+static void host_idle(void *userdata) {
+        lssd_context *ctx = userdata;
+        if (ctx->stopping)
+                lssd_context_check_stopped(ctx);
+}
+
+static const lssd_bus_host_ops bus_host_ops = {
+        .next_job_id = host_next_job_id,
+        .stopping = host_stopping,
+        .started = host_started,
+        .status_changed = host_status_changed,
+        .boot_pass_done = host_boot_pass_done,
+        .removed = host_removed,
+        .idle = host_idle,
+};
+
 static int context_add_bus(lssd_context *ctx, const lssd_bus_config *c) {
+        const lssd_bus_host host = {
+                .event = ctx->event,
+                .dbus = ctx->bus,
+                .auth = &ctx->auth,
+                .args = &ctx->args,
+                .ops = &bus_host_ops,
+                .userdata = ctx,
+        };
         lssd_bus **a = realloc(ctx->buses, (ctx->n_buses + 1) * sizeof(*a));
         if (!a)
                 return -ENOMEM;
         ctx->buses = a;
         lssd_bus *b;
-        int r = lssd_bus_new(ctx, c, &b);
+        int r = lssd_bus_new(&host, c, &b);
         if (r < 0)
                 return r;
         ctx->buses[ctx->n_buses++] = b;
@@ -138,16 +191,16 @@ int lssd_context_apply_config(lssd_context *ctx, lssd_config *config) {
 
         for (size_t i = 0; i < ctx->n_buses; i++) {
                 lssd_bus *b = ctx->buses[i];
-                const lssd_bus_config *c = lssd_config_find_bus(config, b->ifname);
+                const lssd_bus_config *c = lssd_config_find_bus(config, lssd_bus_ifname(b));
                 if (c) {
-                        if (b->removing) {
-                                b->removing = false;
+                        if (lssd_bus_removing(b)) {
+                                lssd_bus_set_removing(b, false);
                                 changed = true;
                         }
                         lssd_bus_set_config(b, c);
-                } else if (!b->removing) {
-                        log_info("%s: no longer in the configuration, removing", b->ifname);
-                        b->removing = true;
+                } else if (!lssd_bus_removing(b)) {
+                        log_info("%s: no longer in the configuration, removing", lssd_bus_ifname(b));
+                        lssd_bus_set_removing(b, true);
                         changed = true;
                         lssd_bus_stop(b, "The bus was removed from the configuration");
                 }
@@ -213,7 +266,7 @@ int lssd_context_reload(lssd_context *ctx, sd_bus_error *error) {
 
 lssd_bus *lssd_context_find_bus(lssd_context *ctx, const char *ifname) {
         for (size_t i = 0; i < ctx->n_buses; i++)
-                if (strcmp(ctx->buses[i]->ifname, ifname) == 0)
+                if (strcmp(lssd_bus_ifname(ctx->buses[i]), ifname) == 0)
                         return ctx->buses[i];
         return NULL;
 }
@@ -225,7 +278,7 @@ void lssd_context_bus_removed(lssd_context *ctx, lssd_bus *b) {
                         ctx->n_buses--;
                         break;
                 }
-        log_info("%s: removed", b->ifname);
+        log_info("%s: removed", lssd_bus_ifname(b));
         lssd_bus_free(b);
         lssd_context_emit_buses_changed(ctx);
         lssd_ready_status(ctx, false);

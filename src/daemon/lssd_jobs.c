@@ -4,7 +4,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "daemon/lssd_bitrate.h"
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_jobs.h"
 #include "daemon/lssd_log.h"
@@ -36,81 +35,82 @@ static void reply_empty(lssd_job *j) {
 }
 
 void lssd_job_abort(lssd_job *j, const char *error_name, const char *message) {
-        sd_bus_error e = SD_BUS_ERROR_NULL;
-        sd_bus_error_set(&e, error_name, message);
-        reply_error(j, &e);
-        sd_bus_error_free(&e);
+        sd_bus_error err = SD_BUS_ERROR_NULL;
+        sd_bus_error_set(&err, error_name, message);
+        reply_error(j, &err);
+        sd_bus_error_free(&err);
         j->result = error_name && strcmp(error_name, LSSD_ERROR_CANCELLED) == 0 ? "cancelled" : "failed";
 }
 
 /* An engine operation that could not even start (a bug, or out of memory). */
-static int job_start_failed(lssd_bus *b, lssd_job *j, int r) {
-        sd_bus_error e = SD_BUS_ERROR_NULL;
-        log_error("%s: failed to start %s: %s", b->ifname, lssd_job_name(j), strerror(-r));
-        sd_bus_error_set_errno(&e, r);
-        reply_error(j, &e);
-        sd_bus_error_free(&e);
+static int job_start_failed(lssd_job_env *e, lssd_job *j, int r) {
+        sd_bus_error err = SD_BUS_ERROR_NULL;
+        log_error("%s: failed to start %s: %s", e->ifname, lssd_job_name(j), strerror(-r));
+        sd_bus_error_set_errno(&err, r);
+        reply_error(j, &err);
+        sd_bus_error_free(&err);
         j->result = "failed";
         return 0;
 }
 
 /* ---- Reset: switch-global waiting ---- */
 
-static int run_reset(lssd_bus *b, lssd_job *j, const lss_result *r) {
+int lssd_run_reset(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (!r) {
-                int k = lss_master_switch_global(b->engine, LSS_MODE_WAITING, lssd_bus_now(b));
+                int k = lss_master_switch_global(e->engine, LSS_MODE_WAITING, lssd_job_env_now(e));
                 if (k >= 0) {
                         lss_timing_config tc;
                         lss_timing_config_default(&tc);
-                        b->unstored_until = lssd_bus_now(b) + tc.bootup_timeout_us;
+                        e->unstored_until = lssd_job_env_now(e) + tc.bootup_timeout_us;
                 }
-                return k < 0 ? job_start_failed(b, j, k) : 1;
+                return k < 0 ? job_start_failed(e, j, k) : 1;
         }
         j->result = lssd_status_to_result(r->status);
         if (r->status != LSS_OK)
-                log_warning("%s: could not switch the slaves to waiting: %s", b->ifname,
+                log_warning("%s: could not switch the slaves to waiting: %s", e->ifname,
                             r->message[0] ? r->message : lssd_status_to_result(r->status));
         else
-                log_debug("%s: all slaves switched to waiting", b->ifname);
+                log_debug("%s: all slaves switched to waiting", e->ifname);
         return 0;
 }
 
 /* ---- raw services of the holder ---- */
 
-static bool sender_holds(lssd_bus *b, const lssd_job *j) {
-        return b->holder_name && j->sender && strcmp(b->holder_name, j->sender) == 0;
+static bool sender_holds(lssd_job_env *e, const lssd_job *j) {
+        const char *holder = e->ops->holder(e->userdata);
+        return holder && j->sender && strcmp(holder, j->sender) == 0;
 }
 
-static int run_raw(lssd_bus *b, lssd_job *j, const lss_result *r) {
+int lssd_run_raw(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         const lssd_raw_step *s = &j->steps[0];
         char what[96];
 
         if (!r) {
                 /* queued while held, but the holder let go before its turn */
-                if (!sender_holds(b, j)) {
+                if (!sender_holds(e, j)) {
                         lssd_job_abort(j, LSSD_ERROR_CANCELLED, "The bus was released before this call ran");
                         return 0;
                 }
-                lssd_taken_check(b, true);
-                int k = lssd_raw_step_start(s, b->engine, lssd_bus_now(b));
-                return k < 0 ? job_start_failed(b, j, k) : 1;
+                lssd_taken_check(e, true);
+                int k = lssd_raw_step_start(s, e->engine, lssd_job_env_now(e));
+                return k < 0 ? job_start_failed(e, j, k) : 1;
         }
 
         lssd_raw_step_describe(s, what, sizeof(what));
         if (!lssd_raw_step_succeeded(s, r)) {
-                sd_bus_error e = SD_BUS_ERROR_NULL;
+                sd_bus_error err = SD_BUS_ERROR_NULL;
                 if (r->in_use)
-                        lssd_taken_error(b, &e, s->node_id, NULL, NULL);
+                        lssd_taken_error(e, &err, s->node_id, NULL, NULL);
                 else
-                        lssd_raw_step_error(s, r, NULL, &e);
-                log_info("%s: %s by %s: %s", b->ifname, what, j->sender ? j->sender : "?", e.message);
-                reply_error(j, &e);
-                sd_bus_error_free(&e);
+                        lssd_raw_step_error(s, r, NULL, &err);
+                log_info("%s: %s by %s: %s", e->ifname, what, j->sender ? j->sender : "?", err.message);
+                reply_error(j, &err);
+                sd_bus_error_free(&err);
                 j->result = lssd_status_to_result(r->status);
                 return 0;
         }
 
-        log_info("%s: %s by %s: done", b->ifname, what, j->sender ? j->sender : "?");
+        log_info("%s: %s by %s: done", e->ifname, what, j->sender ? j->sender : "?");
         j->result = "done";
         if (!j->request)
                 return 0;
@@ -121,25 +121,25 @@ static int run_raw(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (k >= 0)
                 reply_message(j, reply);
         else
-                log_error("%s: failed to build the reply of %s: %s", b->ifname, what, strerror(-k));
+                log_error("%s: failed to build the reply of %s: %s", e->ifname, what, strerror(-k));
         sd_bus_message_unref(reply);
         return 0;
 }
 
 /* ---- Execute: steps, then always switch-global waiting ---- */
 
-static int execute_start_stage(lssd_bus *b, lssd_job *j) {
-        uint64_t now = lssd_bus_now(b);
+static int execute_start_stage(lssd_job_env *e, lssd_job *j) {
+        uint64_t now = lssd_job_env_now(e);
         int k;
         if (j->stage < j->n_steps) {
-                lssd_taken_check(b, true);
-                k = lssd_raw_step_start(&j->steps[j->stage], b->engine, now);
+                lssd_taken_check(e, true);
+                k = lssd_raw_step_start(&j->steps[j->stage], e->engine, now);
         } else
-                k = lss_master_switch_global(b->engine, LSS_MODE_WAITING, now);
-        return k < 0 ? job_start_failed(b, j, k) : 1;
+                k = lss_master_switch_global(e->engine, LSS_MODE_WAITING, now);
+        return k < 0 ? job_start_failed(e, j, k) : 1;
 }
 
-static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
+int lssd_run_execute(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         int k;
 
         if (!r) {
@@ -149,9 +149,9 @@ static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
                         if (k >= 0)
                                 k = sd_bus_message_open_container(j->reply, 'a', "v");
                         if (k < 0)
-                                return job_start_failed(b, j, k);
+                                return job_start_failed(e, j, k);
                 }
-                return execute_start_stage(b, j);
+                return execute_start_stage(e, j);
         }
 
         if (j->stage < j->n_steps) {
@@ -168,7 +168,7 @@ static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
                         snprintf(prefix, sizeof(prefix), "steps[%u] (%s): ", j->stage,
                                  lssd_raw_op_to_string(s->op));
                         if (r->in_use)
-                                lssd_taken_error(b, &j->error, s->node_id, NULL, prefix);
+                                lssd_taken_error(e, &j->error, s->node_id, NULL, prefix);
                         else
                                 lssd_raw_step_error(s, r, prefix, &j->error);
                         j->result = lssd_status_to_result(r->status);
@@ -176,7 +176,7 @@ static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 }
                 if (sd_bus_error_is_set(&j->error))
                         j->stage = (unsigned) j->n_steps;
-                return execute_start_stage(b, j);
+                return execute_start_stage(e, j);
         }
 
         /* the final switch to waiting is done */
@@ -187,7 +187,7 @@ static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
         }
 
         if (sd_bus_error_is_set(&j->error)) {
-                log_info("%s: Execute (%zu steps) by %s failed: %s", b->ifname, j->n_steps,
+                log_info("%s: Execute (%zu steps) by %s failed: %s", e->ifname, j->n_steps,
                          j->sender ? j->sender : "?", j->error.message);
                 reply_error(j, &j->error);
                 if (!j->result)
@@ -195,21 +195,21 @@ static int run_execute(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 return 0;
         }
 
-        log_info("%s: Execute (%zu steps) by %s: done", b->ifname, j->n_steps, j->sender ? j->sender : "?");
+        log_info("%s: Execute (%zu steps) by %s: done", e->ifname, j->n_steps, j->sender ? j->sender : "?");
         j->result = "done";
         if (j->reply) {
                 k = sd_bus_message_close_container(j->reply);
                 if (k >= 0)
                         reply_message(j, j->reply);
                 else
-                        log_error("%s: failed to build the reply of Execute: %s", b->ifname, strerror(-k));
+                        log_error("%s: failed to build the reply of Execute: %s", e->ifname, strerror(-k));
         }
         return 0;
 }
 
 /* ---- AssignNodeId ---- */
 
-static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
+int lssd_run_assign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         char ident[40];
         lssd_identity_format(&j->identity, ident, sizeof(ident));
 
@@ -217,47 +217,47 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 unsigned flags = (j->assign.store ? LSS_ASSIGN_STORE : 0u) |
                                  (j->assign.verify ? LSS_ASSIGN_VERIFY : 0u) |
                                  (j->assign.force ? 0u : LSS_ASSIGN_CHECK_FREE);
-                lssd_taken_check(b, true);
-                int k = lss_master_assign(b->engine, &j->identity, j->node_id, flags, lssd_bus_now(b));
-                return k < 0 ? job_start_failed(b, j, k) : 1;
+                lssd_taken_check(e, true);
+                int k = lss_master_assign(e->engine, &j->identity, j->node_id, flags, lssd_job_env_now(e));
+                return k < 0 ? job_start_failed(e, j, k) : 1;
         }
 
         if (r->status != LSS_OK) {
-                sd_bus_error e = SD_BUS_ERROR_NULL;
+                sd_bus_error err = SD_BUS_ERROR_NULL;
                 if (r->in_use)
-                        lssd_taken_error(b, &e, j->node_id, &j->identity, NULL);
+                        lssd_taken_error(e, &err, j->node_id, &j->identity, NULL);
                 else
-                        lssd_error_from_result(&e, r, r->failed_service, NULL);
-                lssd_log_device(LOG_WARNING, b->ifname, &j->identity, j->node_id,
-                                "%s: AssignNodeId %s -> node %u failed: %s", b->ifname, ident, j->node_id,
-                                e.message);
-                reply_error(j, &e);
-                sd_bus_error_free(&e);
+                        lssd_error_from_result(&err, r, r->failed_service, NULL);
+                lssd_log_device(LOG_WARNING, e->ifname, &j->identity, j->node_id,
+                                "%s: AssignNodeId %s -> node %u failed: %s", e->ifname, ident, j->node_id,
+                                err.message);
+                reply_error(j, &err);
+                sd_bus_error_free(&err);
                 j->result = lssd_status_to_result(r->status);
                 /* the slave is not where we thought: it is not missing though, it did not answer a selective switch */
                 return 0;
         }
 
         lssd_device *d = NULL;
-        int k = lssd_bus_get_device(b, &j->identity, j->node_id, &d);
+        int k = lssd_devices_get(e->devices, &j->identity, true, j->node_id, lssd_realtime_us(), &d);
         if (k >= 0) {
                 uint8_t old = r->node_id;
                 if (d->node_id != j->node_id)
                         d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
                 d->node_id = j->node_id;
-                lssd_heard_owner(&b->heard, j->node_id, &j->identity);
+                lssd_heard_owner(e->heard, j->node_id, &j->identity);
                 d->assigned = true;
                 d->pooled = false;
                 d->blocked = false;
                 d->missing = false;
                 d->last_seen = lssd_realtime_us();
                 d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
-                lssd_bus_refresh_devices(b);
-                if (r->changed && b->ctx->bus)
-                        (void) sd_bus_emit_signal(b->ctx->bus, b->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
+                lssd_devices_refresh(e->devices);
+                if (r->changed && e->dbus)
+                        (void) sd_bus_emit_signal(e->dbus, e->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
                                                   d->path, old, j->node_id);
         } else
-                log_error("%s: failed to record device %s: %s", b->ifname, ident, strerror(-k));
+                log_error("%s: failed to record device %s: %s", e->ifname, ident, strerror(-k));
 
         char stored[80] = "";
         if (r->not_stored)
@@ -265,8 +265,8 @@ static int run_assign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                          lss_store_error_name(r->err));
         else if (r->changed && j->assign.store)
                 snprintf(stored, sizeof(stored), ", stored");
-        lssd_log_device(LOG_NOTICE, b->ifname, &j->identity, j->node_id, "%s: device %s: node-ID %u -> %u%s%s",
-                        b->ifname, ident, r->node_id, j->node_id, r->changed ? "" : " (already set)", stored);
+        lssd_log_device(LOG_NOTICE, e->ifname, &j->identity, j->node_id, "%s: device %s: node-ID %u -> %u%s%s",
+                        e->ifname, ident, r->node_id, j->node_id, r->changed ? "" : " (already set)", stored);
         j->result = "done";
         reply_empty(j);
         return 0;
@@ -280,25 +280,25 @@ static void append_sentence(char *buf, size_t size, const char *text) {
                 snprintf(buf + n, size - n, "%s%s", n ? "; " : "", text);
 }
 
-static int run_unassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
+int lssd_run_unassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         char ident[40];
         lssd_identity_format(&j->identity, ident, sizeof(ident));
 
         if (!r) {
                 unsigned flags = (j->unassign.store ? LSS_UNASSIGN_STORE : 0u) |
                                  (j->unassign.reset ? LSS_UNASSIGN_RESET : 0u);
-                int k = lss_master_unassign(b->engine, &j->identity, flags, lssd_bus_now(b));
-                return k < 0 ? job_start_failed(b, j, k) : 1;
+                int k = lss_master_unassign(e->engine, &j->identity, flags, lssd_job_env_now(e));
+                return k < 0 ? job_start_failed(e, j, k) : 1;
         }
 
         uint8_t old = r->node_id;
         if (r->status != LSS_OK) {
-                sd_bus_error e = SD_BUS_ERROR_NULL;
-                lssd_error_from_result(&e, r, r->failed_service, NULL);
-                lssd_log_device(LOG_WARNING, b->ifname, &j->identity, old, "%s: UnassignNodeId %s failed: %s",
-                                b->ifname, ident, e.message);
-                reply_error(j, &e);
-                sd_bus_error_free(&e);
+                sd_bus_error err = SD_BUS_ERROR_NULL;
+                lssd_error_from_result(&err, r, r->failed_service, NULL);
+                lssd_log_device(LOG_WARNING, e->ifname, &j->identity, old, "%s: UnassignNodeId %s failed: %s",
+                                e->ifname, ident, err.message);
+                reply_error(j, &err);
+                sd_bus_error_free(&err);
                 j->result = lssd_status_to_result(r->status);
                 return 0;
         }
@@ -306,25 +306,25 @@ static int run_unassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         /* it answered: lssd knows it from now on, at the node-ID it runs with */
         lssd_device *d = NULL;
         uint8_t now_id = r->in_effect ? LSS_NODE_ID_UNCONFIGURED : old;
-        int k = lssd_bus_get_device(b, &j->identity, now_id, &d);
+        int k = lssd_devices_get(e->devices, &j->identity, true, now_id, lssd_realtime_us(), &d);
         if (k >= 0) {
                 if (d->node_id != now_id)
                         d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
                 d->node_id = now_id;
                 if (r->in_effect) {
-                        lssd_heard_owner(&b->heard, LSS_NODE_ID_UNCONFIGURED, &j->identity);
+                        lssd_heard_owner(e->heard, LSS_NODE_ID_UNCONFIGURED, &j->identity);
                         d->assigned = d->pooled = false;
                 }
                 d->blocked = false;
                 d->missing = false;
                 d->last_seen = lssd_realtime_us();
                 d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
-                lssd_bus_refresh_devices(b);
-                if (r->in_effect && old != LSS_NODE_ID_UNCONFIGURED && b->ctx->bus)
-                        (void) sd_bus_emit_signal(b->ctx->bus, b->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
+                lssd_devices_refresh(e->devices);
+                if (r->in_effect && old != LSS_NODE_ID_UNCONFIGURED && e->dbus)
+                        (void) sd_bus_emit_signal(e->dbus, e->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
                                                   d->path, old, LSS_NODE_ID_UNCONFIGURED);
         } else
-                log_error("%s: failed to record device %s: %s", b->ifname, ident, strerror(-k));
+                log_error("%s: failed to record device %s: %s", e->ifname, ident, strerror(-k));
 
         /* what happened, and what remains */
         char message[200], warning[400] = "", s[200];
@@ -357,7 +357,7 @@ static int run_unassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                          "one at boot) gives it back", d->mapped_node_id);
                 append_sentence(warning, sizeof(warning), s);
         }
-        lssd_log_device(LOG_NOTICE, b->ifname, &j->identity, old, "%s: device %s: %s%s%s", b->ifname, ident, message,
+        lssd_log_device(LOG_NOTICE, e->ifname, &j->identity, old, "%s: device %s: %s%s%s", e->ifname, ident, message,
                         warning[0] ? "; " : "", warning);
         j->result = "done";
         if (!j->request)
@@ -369,7 +369,7 @@ static int run_unassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (k >= 0)
                 reply_message(j, reply);
         else
-                log_error("%s: failed to build the reply of UnassignNodeId: %s", b->ifname, strerror(-k));
+                log_error("%s: failed to build the reply of UnassignNodeId: %s", e->ifname, strerror(-k));
         sd_bus_message_unref(reply);
         return 0;
 }
@@ -379,18 +379,18 @@ static int run_unassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
 /* What an enumeration will likely find: the non-configured devices seen
  * before (the first scan of a bus cannot know: its progress assumes as many
  * again as found so far). */
-static void expect_finds(lssd_bus *b) {
+static void expect_finds(lssd_job_env *e) {
         unsigned n = 0;
-        for (const lssd_device *d = b->devices; d; d = d->next)
+        for (const lssd_device *d = e->devices->head; d; d = d->next)
                 n += !d->missing && d->node_id == LSS_NODE_ID_UNCONFIGURED;
-        lss_master_set_expected_finds(b->engine, n);
+        lss_master_set_expected_finds(e->engine, n);
 }
 
-int lssd_scan_stage_start(lssd_bus *b, const lssd_job *j) {
-        uint64_t now = lssd_bus_now(b);
+int lssd_scan_stage_start(lssd_job_env *e, const lssd_job *j) {
+        uint64_t now = lssd_job_env_now(e);
         if (j->stage == 0) {
-                expect_finds(b);
-                return lss_master_enumerate(b->engine, NULL, now);
+                expect_finds(e);
+                return lss_master_enumerate(e->engine, NULL, now);
         }
         const lssd_vendor_product *p = &j->pairs[j->stage - 1];
         lss_identify_range range = {
@@ -398,12 +398,12 @@ int lssd_scan_stage_start(lssd_bus *b, const lssd_job *j) {
                 .rev_lo = 0, .rev_hi = UINT32_MAX,
                 .serial_lo = 0, .serial_hi = UINT32_MAX,
         };
-        return lss_master_slowscan(b->engine, &range, now);
+        return lss_master_slowscan(e->engine, &range, now);
 }
 
-static int scan_start_stage(lssd_bus *b, lssd_job *j) {
-        int k = lssd_scan_stage_start(b, j);
-        return k < 0 ? job_start_failed(b, j, k) : 1;
+static int scan_start_stage(lssd_job_env *e, lssd_job *j) {
+        int k = lssd_scan_stage_start(e, j);
+        return k < 0 ? job_start_failed(e, j, k) : 1;
 }
 
 static int compare_devices(const void *a, const void *b) {
@@ -423,16 +423,16 @@ static bool scan_covers(const lssd_job *j, const lssd_device *d) {
 
 /* The device object of a device the scan found, brought up to date
  * (created when new); NULL when it could not be recorded. */
-static lssd_device *scan_record(lssd_bus *b, const lss_device *f, uint64_t now_realtime) {
+static lssd_device *scan_record(lssd_job_env *e, const lss_device *f, uint64_t now_realtime) {
         lssd_device *d = NULL;
         char ident[40];
-        int k = lssd_bus_get_device(b, &f->id, f->node_id, &d);
+        int k = lssd_devices_get(e->devices, &f->id, true, f->node_id, lssd_realtime_us(), &d);
         if (k < 0) {
-                log_error("%s: failed to record device %s: %s", b->ifname,
+                log_error("%s: failed to record device %s: %s", e->ifname,
                           lssd_identity_format(&f->id, ident, sizeof(ident)), strerror(-k));
                 return NULL;
         }
-        lssd_heard_owner(&b->heard, f->node_id, &f->id);
+        lssd_heard_owner(e->heard, f->node_id, &f->id);
         if (d->node_id != f->node_id) {
                 d->node_id = f->node_id;
                 d->assigned = false;
@@ -453,8 +453,8 @@ static bool scan_announced(const lssd_job *j, const lss_identity *id) {
 
 /* DeviceFound, and UnknownDevice when the map does not know it: once per
  * device and job. */
-static void scan_announce(lssd_bus *b, lssd_job *j, const lss_device *f, const lssd_device *d) {
-        sd_bus *bus = b->ctx->bus;
+static void scan_announce(lssd_job_env *e, lssd_job *j, const lss_device *f, const lssd_device *d) {
+        sd_bus *bus = e->dbus;
         lss_identity *a = realloc(j->announced, (j->n_announced + 1) * sizeof(*a));
         if (a) {
                 j->announced = a;
@@ -463,26 +463,26 @@ static void scan_announce(lssd_bus *b, lssd_job *j, const lss_device *f, const l
         if (!bus)
                 return;
         if (d)
-                (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "DeviceFound", "o", d->path);
-        if (!lssd_config_lookup_device(b->config, &f->id))
-                (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu", f->id.vendor,
+                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "DeviceFound", "o", d->path);
+        if (!lssd_config_lookup_device(e->config, &f->id))
+                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu", f->id.vendor,
                                           f->id.product, f->id.revision, f->id.serial);
 }
 
-void lssd_scan_found(lssd_bus *b, lssd_job *j, const lss_device *f) {
+void lssd_scan_found(lssd_job_env *e, lssd_job *j, const lss_device *f) {
         if (scan_announced(j, &f->id))
                 return; /* by an earlier stage: the end brings its node-ID up to date */
-        lssd_device *d = scan_record(b, f, lssd_realtime_us());
+        lssd_device *d = scan_record(e, f, lssd_realtime_us());
         if (!d)
                 return; /* tried again at the end */
-        lssd_bus_refresh_devices(b);
-        scan_announce(b, j, f, d);
+        lssd_devices_refresh(e->devices);
+        scan_announce(e, j, f, d);
 }
 
-static void scan_publish(lssd_bus *b, lssd_job *j, uint64_t now_realtime) {
+static void scan_publish(lssd_job_env *e, lssd_job *j, uint64_t now_realtime) {
         /* who was not found although the scan would have */
         if (!j->scan_incomplete)
-                for (lssd_device *d = b->devices; d; d = d->next) {
+                for (lssd_device *d = e->devices->head; d; d = d->next) {
                         bool found = false;
                         for (size_t i = 0; i < j->n_found && !found; i++)
                                 found = lss_identity_equal(&j->found[i].id, &d->id);
@@ -494,23 +494,23 @@ static void scan_publish(lssd_bus *b, lssd_job *j, uint64_t now_realtime) {
          * later stage read another node-ID; the others are recorded now. */
         for (size_t i = 0; i < j->n_found; i++) {
                 const lss_device *f = &j->found[i];
-                const lssd_device *d = lssd_bus_find_device(b, &f->id);
+                const lssd_device *d = lssd_devices_find(e->devices, &f->id);
                 if (!scan_announced(j, &f->id) || !d || d->node_id != f->node_id)
-                        (void) scan_record(b, f, now_realtime);
+                        (void) scan_record(e, f, now_realtime);
         }
-        lssd_bus_refresh_devices(b);
+        lssd_devices_refresh(e->devices);
 
         for (size_t i = 0; i < j->n_found; i++) {
                 const lss_device *f = &j->found[i];
                 if (!scan_announced(j, &f->id))
-                        scan_announce(b, j, f, lssd_bus_find_device(b, &f->id));
+                        scan_announce(e, j, f, lssd_devices_find(e->devices, &f->id));
         }
 }
 
-static void scan_log(lssd_bus *b, lssd_job *j) {
+static void scan_log(lssd_job_env *e, lssd_job *j) {
         char line[900];
         size_t n = 0;
-        n += (size_t) snprintf(line, sizeof(line), "%s: Scan: %zu device%s", b->ifname, j->n_found,
+        n += (size_t) snprintf(line, sizeof(line), "%s: Scan: %zu device%s", e->ifname, j->n_found,
                                j->n_found == 1 ? "" : "s");
         for (size_t i = 0; i < j->n_found && n < sizeof(line); i++) {
                 char ident[40];
@@ -527,20 +527,20 @@ static void scan_log(lssd_bus *b, lssd_job *j) {
                 char ident[40];
                 const lss_device *d = &j->found[i];
                 lssd_identity_format(&d->id, ident, sizeof(ident));
-                lssd_log_device(LOG_DEBUG, b->ifname, &d->id, d->node_id, "%s: found %s node %u", b->ifname, ident,
+                lssd_log_device(LOG_DEBUG, e->ifname, &d->id, d->node_id, "%s: found %s node %u", e->ifname, ident,
                                 d->node_id);
                 if (d->aside_node_id)
-                        lssd_log_device(LOG_INFO, b->ifname, &d->id, d->node_id,
+                        lssd_log_device(LOG_INFO, e->ifname, &d->id, d->node_id,
                                         "%s: Scan set %s aside with the volatile node-ID %u while it went on, then "
                                         "gave it 255 back (NMT Reset Communication of node %u); node-ID now %u",
-                                        b->ifname, ident, d->aside_node_id, d->aside_node_id, d->node_id);
+                                        e->ifname, ident, d->aside_node_id, d->aside_node_id, d->node_id);
         }
 }
 
-static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
+int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (!r) {
                 j->n_stages = (unsigned) j->n_pairs + 1;
-                return scan_start_stage(b, j);
+                return scan_start_stage(e, j);
         }
 
         for (size_t i = 0; i < r->n_devices; i++)
@@ -550,24 +550,24 @@ static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
                 }
 
         if (r->status != LSS_OK) {
-                sd_bus_error e = SD_BUS_ERROR_NULL;
+                sd_bus_error err = SD_BUS_ERROR_NULL;
                 j->scan_incomplete = true;
-                scan_publish(b, j, lssd_realtime_us());
-                lssd_error_from_result(&e, r, LSS_SERVICE_NONE, "Scan: ");
-                log_warning("%s: %s", b->ifname, e.message);
-                reply_error(j, &e);
-                sd_bus_error_free(&e);
+                scan_publish(e, j, lssd_realtime_us());
+                lssd_error_from_result(&err, r, LSS_SERVICE_NONE, "Scan: ");
+                log_warning("%s: %s", e->ifname, err.message);
+                reply_error(j, &err);
+                sd_bus_error_free(&err);
                 j->result = lssd_status_to_result(r->status);
                 return 0;
         }
 
         if (++j->stage <= j->n_pairs)
-                return scan_start_stage(b, j);
+                return scan_start_stage(e, j);
 
         if (j->n_found > 1) /* found is NULL when nothing was found, and qsort's pointer is nonnull */
                 qsort(j->found, j->n_found, sizeof(*j->found), compare_devices);
-        scan_publish(b, j, lssd_realtime_us());
-        scan_log(b, j);
+        scan_publish(e, j, lssd_realtime_us());
+        scan_log(e, j);
         j->result = "done";
 
         if (!j->request)
@@ -586,7 +586,7 @@ static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (k >= 0)
                 reply_message(j, reply);
         else
-                log_error("%s: failed to build the reply of Scan: %s", b->ifname, strerror(-k));
+                log_error("%s: failed to build the reply of Scan: %s", e->ifname, strerror(-k));
         sd_bus_message_unref(reply);
         return 0;
 }
@@ -596,14 +596,14 @@ static int run_scan(lssd_bus *b, lssd_job *j, const lss_result *r) {
 /* A mapped device that is not there: the objects of it we know (any revision
  * when the map has none) are missing; only when we know none is one made from
  * the map's identity, so that the absence shows. */
-static bool autoassign_mark_missing(lssd_bus *b, const lssd_job *j, const lss_outcome *o) {
+static bool autoassign_mark_missing(lssd_job_env *e, const lssd_job *j, const lss_outcome *o) {
         bool marked = false;
         for (size_t i = 0; i < j->plan.n_map; i++) {
-                const lss_map_entry *e = &j->plan.map[i];
-                if (!lss_map_entry_matches(e, &o->id))
+                const lss_map_entry *m = &j->plan.map[i];
+                if (!lss_map_entry_matches(m, &o->id))
                         continue;
-                for (lssd_device *d = b->devices; d; d = d->next)
-                        if (lss_map_entry_matches(e, &d->id)) {
+                for (lssd_device *d = e->devices->head; d; d = d->next)
+                        if (lss_map_entry_matches(m, &d->id)) {
                                 d->missing = true;
                                 d->blocked = false;
                                 marked = true;
@@ -624,22 +624,22 @@ static bool outcome_revision_known(const lssd_job *j, const lss_outcome *o) {
 }
 
 /* Brings the Device object of one outcome up to date. */
-static void autoassign_publish_one(lssd_bus *b, const lssd_job *j, const lss_outcome *o, uint64_t now_realtime) {
+static void autoassign_publish_one(lssd_job_env *e, const lssd_job *j, const lss_outcome *o, uint64_t now_realtime) {
         bool missing = o->kind == LSS_OUTCOME_MISSING;
         uint8_t node_id = o->new_node_id != 0 ? o->new_node_id : LSS_NODE_ID_UNCONFIGURED;
         lssd_device *d = NULL;
         char ident[40];
 
-        if (missing && autoassign_mark_missing(b, j, o))
+        if (missing && autoassign_mark_missing(e, j, o))
                 return;
-        int k = lssd_bus_get_device_full(b, &o->id, outcome_revision_known(j, o), node_id, &d);
+        int k = lssd_devices_get(e->devices, &o->id, outcome_revision_known(j, o), node_id, lssd_realtime_us(), &d);
         if (k < 0) {
-                log_error("%s: failed to record device %s: %s", b->ifname,
+                log_error("%s: failed to record device %s: %s", e->ifname,
                           lssd_identity_format(&o->id, ident, sizeof(ident)), strerror(-k));
                 return;
         }
         if (!missing)
-                lssd_heard_owner(&b->heard, node_id, &o->id);
+                lssd_heard_owner(e->heard, node_id, &o->id);
         if (!missing && o->new_node_id != 0 && d->node_id != o->new_node_id) {
                 d->node_id = o->new_node_id;
                 d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
@@ -677,7 +677,7 @@ static const char *outcome_name(const lss_outcome *o) {
         return lss_outcome_name(o->kind);
 }
 
-static void autoassign_log_one(lssd_bus *b, const lssd_job *j, const lss_outcome *o) {
+static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_outcome *o) {
         char ident[40], detail[200];
         int priority = LOG_INFO;
 
@@ -699,34 +699,34 @@ static void autoassign_log_one(lssd_bus *b, const lssd_job *j, const lss_outcome
                 break;
         }
         outcome_detail(o, detail, sizeof(detail));
-        lssd_log_device(priority, b->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s%s",
-                        b->ifname, ident, outcome_name(o), o->old_node_id, o->new_node_id,
+        lssd_log_device(priority, e->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s%s",
+                        e->ifname, ident, outcome_name(o), o->old_node_id, o->new_node_id,
                         !detail[0] ? "" : o->not_stored ? ", " : ": ", detail);
 }
 
-static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
+int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         size_t n = 0, count[LSS_OUTCOME_FAILED + 1] = { 0 };
         const lss_outcome *out;
-        sd_bus *bus = b->ctx->bus;
+        sd_bus *bus = e->dbus;
         uint64_t now_realtime = lssd_realtime_us();
 
         if (!r) {
-                b->pass_started_us = now_realtime;
-                j->plan.unstored = b->unstored;
-                lssd_taken_check(b, false);
-                expect_finds(b);
-                int k = lss_master_autoassign(b->engine, &j->plan, lssd_bus_now(b));
-                return k < 0 ? job_start_failed(b, j, k) : 1;
+                e->pass_started_us = now_realtime;
+                j->plan.unstored = e->unstored;
+                lssd_taken_check(e, false);
+                expect_finds(e);
+                int k = lss_master_autoassign(e->engine, &j->plan, lssd_job_env_now(e));
+                return k < 0 ? job_start_failed(e, j, k) : 1;
         }
         if (r->status == LSS_OK)
-                memset(b->unstored, 0, sizeof(b->unstored));
+                memset(e->unstored, 0, sizeof(e->unstored));
 
-        const lss_master_stats *st = lss_master_get_stats(b->engine);
+        const lss_master_stats *st = lss_master_get_stats(e->engine);
         if (st->patient_wait_us)
                 log_notice("%s: AutoAssign: mapped devices were not found at first: looked for them again with "
-                           "waits of %u ms (the configured LSS timeout is %u ms)", b->ifname,
-                           st->patient_wait_us / 1000, b->config->lss_timeout_ms);
-        out = lss_master_outcomes(b->engine, &n);
+                           "waits of %u ms (the configured LSS timeout is %u ms)", e->ifname,
+                           st->patient_wait_us / 1000, e->config->lss_timeout_ms);
+        out = lss_master_outcomes(e->engine, &n);
         for (size_t i = 0; i < n; i++) {
                 /* what a dry run would change did not change: the device is
                  * where it was found */
@@ -736,30 +736,30 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                         seen.new_node_id = seen.old_node_id;
                         seen.dry = false;
                 }
-                autoassign_publish_one(b, j, &seen, now_realtime);
-                autoassign_log_one(b, j, &out[i]);
+                autoassign_publish_one(e, j, &seen, now_realtime);
+                autoassign_log_one(e, j, &out[i]);
                 if ((unsigned) out[i].kind <= LSS_OUTCOME_FAILED)
                         count[out[i].kind]++;
         }
-        lssd_bus_refresh_devices(b);
+        lssd_devices_refresh(e->devices);
 
         if (bus)
                 for (size_t i = 0; i < n; i++) {
                         const lss_outcome *o = &out[i];
-                        lssd_device *d = lssd_bus_find_device(b, &o->id);
+                        lssd_device *d = lssd_devices_find(e->devices, &o->id);
                         if (outcome_changed(o) && d)
-                                (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
+                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
                                                           d->path, o->old_node_id, o->new_node_id);
                         else if (o->kind == LSS_OUTCOME_UNKNOWN)
-                                (void) sd_bus_emit_signal(bus, b->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu",
+                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu",
                                                           o->id.vendor, o->id.product, o->id.revision, o->id.serial);
                 }
 
         /* a dry run is not the bus's last pass */
-        lssd_pass_record dry_rec, *rec = j->plan.dry_run ? &dry_rec : &b->last_pass;
-        *rec = (lssd_pass_record) { .started_us = b->pass_started_us, .boot = b->boot_pending,
-                                    .duration_us = now_realtime > b->pass_started_us ?
-                                                           now_realtime - b->pass_started_us : 0 };
+        lssd_pass_record dry_rec, *rec = j->plan.dry_run ? &dry_rec : &e->last_pass;
+        *rec = (lssd_pass_record) { .started_us = e->pass_started_us, .boot = e->boot_pending,
+                                    .duration_us = now_realtime > e->pass_started_us ?
+                                                           now_realtime - e->pass_started_us : 0 };
         for (size_t i = 0; i <= LSS_OUTCOME_FAILED; i++)
                 rec->counts[i] = (uint32_t) count[i];
         /* the bus matches the map only when every mapped device has its node-ID */
@@ -769,22 +769,22 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
                                       : "done";
         snprintf(rec->result, sizeof(rec->result), "%s", verdict);
         if (!j->plan.dry_run)
-                b->changed |= LSSD_BUS_CHANGED_LAST_PASS;
+                e->ops->last_pass_changed(e->userdata);
 
         snprintf(j->summary, sizeof(j->summary),
                  "%s: %zu %sassigned, %zu from the pool, %zu unchanged, %zu unknown, %zu missing, %zu conflicts, "
-                 "%zu failed", b->ifname, count[LSS_OUTCOME_ASSIGNED], j->plan.dry_run ? "would be " : "",
+                 "%zu failed", e->ifname, count[LSS_OUTCOME_ASSIGNED], j->plan.dry_run ? "would be " : "",
                  count[LSS_OUTCOME_POOL],
                  count[LSS_OUTCOME_UNCHANGED], count[LSS_OUTCOME_UNKNOWN], count[LSS_OUTCOME_MISSING],
                  count[LSS_OUTCOME_CONFLICT], count[LSS_OUTCOME_FAILED]);
 
         if (r->status != LSS_OK) {
                 /* the pass as a whole broke off (bus down, cancelled): what it did is published above */
-                sd_bus_error e = SD_BUS_ERROR_NULL;
-                lssd_error_from_result(&e, r, LSS_SERVICE_NONE, "AutoAssign: ");
-                log_warning("%s: %s (%s)", b->ifname, e.message, j->summary);
-                reply_error(j, &e);
-                sd_bus_error_free(&e);
+                sd_bus_error err = SD_BUS_ERROR_NULL;
+                lssd_error_from_result(&err, r, LSS_SERVICE_NONE, "AutoAssign: ");
+                log_warning("%s: %s (%s)", e->ifname, err.message, j->summary);
+                reply_error(j, &err);
+                sd_bus_error_free(&err);
                 j->result = lssd_status_to_result(r->status);
                 return 0;
         }
@@ -813,30 +813,7 @@ static int run_autoassign(lssd_bus *b, lssd_job *j, const lss_result *r) {
         if (k >= 0)
                 reply_message(j, reply);
         else
-                log_error("%s: failed to build the reply of AutoAssign: %s", b->ifname, strerror(-k));
+                log_error("%s: failed to build the reply of AutoAssign: %s", e->ifname, strerror(-k));
         sd_bus_message_unref(reply);
         return 0;
-}
-
-int lssd_job_run(lssd_bus *b, lssd_job *j, const lss_result *r) {
-        switch (j->type) {
-        case LSSD_JOB_RESET:
-                return run_reset(b, j, r);
-        case LSSD_JOB_SCAN:
-                return run_scan(b, j, r);
-        case LSSD_JOB_ASSIGN:
-                return run_assign(b, j, r);
-        case LSSD_JOB_RAW:
-                return run_raw(b, j, r);
-        case LSSD_JOB_EXECUTE:
-                return run_execute(b, j, r);
-        case LSSD_JOB_AUTO_ASSIGN:
-                return run_autoassign(b, j, r);
-        case LSSD_JOB_SET_BITRATE:
-                return lssd_bitrate_run(b, j, r);
-        case LSSD_JOB_UNASSIGN:
-                return run_unassign(b, j, r);
-        default:
-                return job_start_failed(b, j, -EINVAL);
-        }
 }
