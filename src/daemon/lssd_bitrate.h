@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* SetBitrate(): the whole network, the master's own interface included, to a
- * new bit rate. A job of two parts: a fresh scan (fastscan + slowscan of the
+ * new bit rate (its runner: lssd_run_bitrate.c). A job of two parts: a fresh scan (fastscan + slowscan of the
  * map's and the known devices' vendor/product pairs), then the engine's
  * bit-rate procedure (lss_master_set_bitrate) over every device found, mapped
  * or known. Between the activation and the verification the engine asks for
@@ -11,13 +11,8 @@
 #include <stdint.h>
 #include <systemd/sd-bus.h>
 
-#include "daemon/lssd_job.h"
-#include "daemon/lssd_job_env.h"
 
 /* Switch delays lssd accepts (ms): long enough to retune the host inside
  * the first period, short enough not to hold the bus for long. */
 #define LSSD_SWITCH_DELAY_MIN_MS 10u
 #define LSSD_SWITCH_DELAY_MAX_MS 10000u
-
-/* Begins or continues a SET_BITRATE job (see lssd_job_run()). */
-int lssd_bitrate_run(lssd_job_env *e, lssd_job *j, const lss_result *r);

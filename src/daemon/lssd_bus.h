@@ -2,7 +2,8 @@
 /* One CAN bus the daemon is the LSS master of: its transport, its engine, its
  * job queue, its holder and its devices; published as an org.lssd.LSS1.Bus
  * object. Exactly one LSS transaction at a time runs on a bus; buses run in
- * parallel, each driven by its own fd and timer in the one event loop. */
+ * parallel, each driven by its own fd and timer in the one event loop.
+ * Implemented in lssd_bus_<concern>.c, which share lssd_bus_private.h. */
 #pragma once
 
 #include <stdbool.h>

@@ -5,25 +5,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "can/rtnl_watch.h"
-#include "daemon/lssd_auth.h"
-#include "daemon/lssd_bitrate.h"
 #include "daemon/lssd_bitrate_host.h"
 #include "daemon/lssd_errors.h"
-#include "daemon/lssd_jobs.h"
+#include "daemon/lssd_job_reply.h"
+#include "daemon/lssd_run.h"
 #include "daemon/lssd_log.h"
-#include "daemon/lssd_options.h"
-#include "daemon/lssd_vtables.h"
 
 /* ---- the job ---- */
-
-static void reply_error(lssd_job *j, const sd_bus_error *e) {
-        if (!j->request)
-                return;
-        int r = sd_bus_reply_method_error(j->request, e);
-        if (r < 0)
-                log_debug("Failed to send error reply to %s: %s", j->sender ? j->sender : "?", strerror(-r));
-}
 
 static int fail(lssd_job_env *e, lssd_job *j, const char *name, const char *result, const char *fmt, ...)
         __attribute__((format(printf, 5, 6)));
@@ -38,7 +26,7 @@ static int fail(lssd_job_env *e, lssd_job *j, const char *name, const char *resu
         va_end(ap);
         log_warning("%s: SetBitrate %u bit/s: %s", e->ifname, j->bitrate, text);
         sd_bus_error_setf(&err, name, "%s", text);
-        reply_error(j, &err);
+        lssd_job_reply_error(j, &err);
         sd_bus_error_free(&err);
         j->result = result;
         return 0;
@@ -214,7 +202,7 @@ static int finish(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                     lssd_status_to_result(r->status), lssd_job_env_bitrate(e));
 }
 
-int lssd_bitrate_run(lssd_job_env *e, lssd_job *j, const lss_result *r) {
+int lssd_run_bitrate(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         char missing[512];
         int k;
 

@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
-#include "daemon/lssd_bitrate.h"
-#include "daemon/lssd_job_runners.h"
-#include "daemon/lssd_jobs.h"
+#include "daemon/lssd_job_reply.h"
+#include "daemon/lssd_run.h"
 
 int lssd_job_run(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         switch (j->type) {
@@ -18,7 +17,7 @@ int lssd_job_run(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         case LSSD_JOB_AUTO_ASSIGN:
                 return lssd_run_autoassign(e, j, r);
         case LSSD_JOB_SET_BITRATE:
-                return lssd_bitrate_run(e, j, r);
+                return lssd_run_bitrate(e, j, r);
         case LSSD_JOB_UNASSIGN:
                 return lssd_run_unassign(e, j, r);
         default:
