@@ -17,7 +17,7 @@
 #include "daemon/lssd_args.h"
 #include "daemon/lssd_auth.h"
 #include "daemon/lssd_devices.h"
-#include "daemon/lssd_job.h"
+#include "daemon/lssd_job_queue.h"
 #include "daemon/lssd_job_env.h"
 #include "lss/lss_master.h"
 

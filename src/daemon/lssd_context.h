@@ -22,7 +22,7 @@
 
 typedef struct lssd_context {
         sd_event *event;
-        sd_bus *bus;
+        sd_bus *dbus;              /* the D-Bus connection (a CAN bus is a lssd_bus) */
         sd_bus_slot *manager_slot, *object_manager_slot;
         rtnl_watch *rtnl;
         sd_event_source *rtnl_source;

@@ -6,7 +6,7 @@
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_context.h"
 #include "daemon/lssd_devices.h"
-#include "daemon/lssd_job.h"
+#include "daemon/lssd_job_queue.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_ready.h"
 

@@ -6,7 +6,7 @@
 
 #include <systemd/sd-bus.h>
 
-#include "daemon/lssd_job.h"
+#include "daemon/lssd_job_queue.h"
 #include "daemon/lssd_job_env.h"
 
 void lssd_job_reply_error(lssd_job *j, const sd_bus_error *e);

@@ -4,7 +4,7 @@
  * lssd_run.c picks the runner). They see the bus only as a lssd_job_env. */
 #pragma once
 
-#include "daemon/lssd_job.h"
+#include "daemon/lssd_job_queue.h"
 #include "daemon/lssd_job_env.h"
 
 /* Begins a job (r == NULL) or continues it after its engine operation ended

@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "daemon/lssd_job.h"
+#include "daemon/lssd_job_queue.h"
 
 const char *lssd_job_name(const lssd_job *j) {
         switch (j->type) {
