@@ -10,23 +10,20 @@
 /* ---- holder ---- */
 
 static void bus_drop_holder(lssd_bus *b, const char *why) {
-        if (!b->holder_name)
+        if (!b->holder.name)
                 return;
-        log_info("%s: released by %s (%s); switching every slave to waiting", b->ifname, b->holder_name, why);
-        b->holder = sd_bus_track_unref(b->holder);
-        free(b->holder_name);
-        b->holder_name = NULL;
+        log_info("%s: released by %s (%s); switching every slave to waiting", b->ifname, b->holder.name, why);
+        lssd_holder_drop(&b->holder);
         bus_queue_reset(b, false);
 }
 
-static int on_holder_gone(sd_bus_track *t, void *userdata) {
+void bus_on_holder_gone(lssd_holder *h, void *userdata) {
         lssd_bus *b = userdata;
         /* a raw service of the vanished holder has nobody to answer to */
         if (b->job && b->job->type == LSSD_JOB_RAW && b->engine_running)
                 lss_master_cancel(b->engine, bus_now(b));
         bus_drop_holder(b, "the holder left the bus");
         bus_process(b);
-        return 0;
 }
 
 int lssd_bus_acquire(lssd_bus *b, sd_bus_message *m, sd_bus_error *error) {
@@ -35,38 +32,28 @@ int lssd_bus_acquire(lssd_bus *b, sd_bus_message *m, sd_bus_error *error) {
 
         if (!sender)
                 return sd_bus_error_set(error, SD_BUS_ERROR_ACCESS_DENIED, "Acquire() needs a bus connection");
-        if (bus_is_holder(b, sender))
+        if (lssd_holder_is(&b->holder, sender))
                 return 0;
         if (b->host.ops->stopping(b->host.userdata) || b->removing)
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s: lssd is stopping serving this bus", b->ifname);
-        if (b->holder_name)
+        if (b->holder.name)
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s already", b->ifname,
-                                         b->holder_name);
+                                         b->holder.name);
 
-        r = sd_bus_track_new(sd_bus_message_get_bus(m), &b->holder, on_holder_gone, b);
+        r = lssd_holder_take(&b->holder, sender, m);
         if (r < 0)
                 return r;
-        r = sd_bus_track_add_sender(b->holder, m);
-        if (r >= 0) {
-                b->holder_name = strdup(sender);
-                if (!b->holder_name)
-                        r = -ENOMEM;
-        }
-        if (r < 0) {
-                b->holder = sd_bus_track_unref(b->holder);
-                return r;
-        }
         log_info("%s: held by %s", b->ifname, sender);
         bus_process(b);
         return 0;
 }
 
 int lssd_bus_release(lssd_bus *b, const char *sender, sd_bus_error *error) {
-        if (!b->holder_name)
+        if (!b->holder.name)
                 return 0;
-        if (!bus_is_holder(b, sender))
+        if (!lssd_holder_is(&b->holder, sender))
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s, not by the caller", b->ifname,
-                                         b->holder_name);
+                                         b->holder.name);
         bus_drop_holder(b, "Release()");
         bus_process(b);
         return 0;
@@ -75,9 +62,9 @@ int lssd_bus_release(lssd_bus *b, const char *sender, sd_bus_error *error) {
 int lssd_bus_cancel(lssd_bus *b, const char *sender, sd_bus_error *error) {
         if (!b->job || b->job->type == LSSD_JOB_RESET || !b->engine_running)
                 return 0;
-        if (b->holder_name && !bus_is_holder(b, sender))
+        if (b->holder.name && !lssd_holder_is(&b->holder, sender))
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s (Acquire)", b->ifname,
-                                         b->holder_name);
+                                         b->holder.name);
         if ((b->engine_running && lssd_job_uncancellable(b->job)))
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY,
                                          "%s: the bit-rate change is under way and cannot be cancelled (devices "

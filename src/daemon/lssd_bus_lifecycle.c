@@ -106,6 +106,7 @@ int lssd_bus_new(const lssd_bus_host *host, const lssd_bus_config *config, lssd_
                 return -ENOMEM;
         b->host = *host;
         b->io_fd = -1;
+        lssd_holder_init(&b->holder, NULL, bus_on_holder_gone, b);
         b->config = lssd_bus_config_dup(config);
         if (!b->config) {
                 free(b);
@@ -253,8 +254,7 @@ lssd_bus *lssd_bus_free(lssd_bus *b) {
                 (void) sd_bus_emit_object_removed(b->host.dbus, b->path);
         b->slot = sd_bus_slot_unref(b->slot);
 
-        b->holder = sd_bus_track_unref(b->holder);
-        free(b->holder_name);
+        lssd_holder_drop(&b->holder);
         b->remove_source = sd_event_source_disable_unref(b->remove_source);
         b->io_source = sd_event_source_disable_unref(b->io_source);
         b->timer_source = sd_event_source_disable_unref(b->timer_source);

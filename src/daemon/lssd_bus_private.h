@@ -7,6 +7,7 @@
 #include "can/transport.h"
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_heard.h"
+#include "daemon/lssd_holder.h"
 #include "daemon/lssd_simbus.h"
 
 /* Frames read per wake-up before the other buses get their turn. */
@@ -54,8 +55,7 @@ struct lssd_bus {
         lssd_job *job;                   /* running */
         double progress;
 
-        sd_bus_track *holder;            /* Acquire() */
-        char *holder_name;
+        lssd_holder holder;              /* Acquire() */
 
         lssd_devices devices;            /* the registry */
 
@@ -90,9 +90,11 @@ void bus_update_io(lssd_bus *b, bool force);
 int bus_on_timer(sd_event_source *s, uint64_t usec, void *userdata);
 
 /* lssd_bus_queue.c: what may be queued, the internal jobs */
-bool bus_is_holder(const lssd_bus *b, const char *sender);
 void bus_queue_reset(lssd_bus *b, bool front);
 void bus_queue_boot_pass(lssd_bus *b);
+
+/* lssd_bus_holder.c */
+void bus_on_holder_gone(lssd_holder *h, void *userdata);
 
 /* lssd_bus_link.c: the host interface */
 bool bus_retune(lssd_bus *b);

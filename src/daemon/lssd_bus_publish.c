@@ -16,7 +16,7 @@ const char *lssd_bus_state(const lssd_bus *b) {
                 return "bus-off";
         if (b->bus_state == LSS_BUS_ERROR_PASSIVE)
                 return "error-passive";
-        if (b->job || b->queue.n > 0 || b->holder_name)
+        if (b->job || b->queue.n > 0 || b->holder.name)
                 return "busy";
         return "idle";
 }

@@ -9,17 +9,13 @@
 
 /* ---- jobs ---- */
 
-bool bus_is_holder(const lssd_bus *b, const char *sender) {
-        return b->holder_name && sender && strcmp(b->holder_name, sender) == 0;
-}
-
 int lssd_bus_check_available(lssd_bus *b, const char *sender, bool raw, sd_bus_error *error) {
         if (b->host.ops->stopping(b->host.userdata) || b->removing)
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s: lssd is stopping serving this bus", b->ifname);
-        if (b->holder_name && !bus_is_holder(b, sender))
+        if (b->holder.name && !lssd_holder_is(&b->holder, sender))
                 return sd_bus_error_setf(error, LSSD_ERROR_BUSY, "%s is held by %s (Acquire)", b->ifname,
-                                         b->holder_name);
-        if (raw && !bus_is_holder(b, sender))
+                                         b->holder.name);
+        if (raw && !lssd_holder_is(&b->holder, sender))
                 return sd_bus_error_setf(error, LSSD_ERROR_NOT_HELD,
                                          "Raw LSS services need the bus held: call Acquire() on %s first, "
                                          "or use Execute()", b->ifname);
@@ -111,11 +107,9 @@ void lssd_bus_stop(lssd_bus *b, const char *why) {
                 lssd_job_free(j);
         }
         b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
-        if (b->holder_name) {
-                log_info("%s: dropping holder %s: %s", b->ifname, b->holder_name, why);
-                b->holder = sd_bus_track_unref(b->holder);
-                free(b->holder_name);
-                b->holder_name = NULL;
+        if (b->holder.name) {
+                log_info("%s: dropping holder %s: %s", b->ifname, b->holder.name, why);
+                lssd_holder_drop(&b->holder);
         }
         /* a bit-rate change runs to its end (seconds): cut off it could
          * leave devices with a pending rate or the bus split */

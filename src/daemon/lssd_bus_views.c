@@ -55,7 +55,7 @@ static uint32_t env_bitrate(void *userdata) {
 
 static const char *env_holder(void *userdata) {
         const lssd_bus *b = userdata;
-        return b->holder_name;
+        return b->holder.name;
 }
 
 static void env_host_link(void *userdata, lssd_host_link *ret) {
@@ -127,7 +127,7 @@ double lssd_bus_progress(const lssd_bus *b) {
 }
 
 const char *lssd_bus_holder(const lssd_bus *b) {
-        return b->holder_name;
+        return b->holder.name;
 }
 
 bool lssd_bus_removing(const lssd_bus *b) {
