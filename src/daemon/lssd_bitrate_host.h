@@ -6,7 +6,7 @@
 
 #include <stdint.h>
 
-#include "daemon/lssd_bus.h"
+#include "daemon/lssd_job_env.h"
 
 typedef struct lssd_bitrate_refusal {
         const char *error;      /* D-Bus error name */
@@ -14,13 +14,13 @@ typedef struct lssd_bitrate_refusal {
         char text[512];         /* the cause, for the reply and the journal */
 } lssd_bitrate_refusal;
 
-/* 0 when the host interface of `b` can be retuned to `bitrate` (a real
+/* 0 when the host interface `h` can be retuned to `bitrate` (a real
  * controller that lssd may retune over rtnetlink, a virtual one with no bit
  * timing, the simulated one); -1 with `ret` filled in otherwise: the
  * interface is down or bus-off, lssd lacks CAP_NET_ADMIN
  * (PermissionDenied), the interface has no bit timing lssd can set
  * (NotSupported). Changes nothing on the interface. */
-int lssd_bitrate_check_host(lssd_bus *b, uint32_t bitrate, lssd_bitrate_refusal *ret);
+int lssd_bitrate_check_host(const lssd_host_link *h, uint32_t bitrate, lssd_bitrate_refusal *ret);
 
 /* The D-Bus error for a host retune that failed with `err` (an errno). */
 const char *lssd_bitrate_retune_error(int err);

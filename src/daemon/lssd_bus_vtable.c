@@ -6,12 +6,23 @@
 #include <string.h>
 
 #include "daemon/lssd_bitrate.h"
+#include "daemon/lssd_bitrate_method.h"
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_taken.h"
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_validate.h"
 #include "daemon/lssd_vtables.h"
+
+static int property_get_interface(sd_bus *bus, const char *path, const char *interface, const char *property,
+                                  sd_bus_message *reply, void *userdata, sd_bus_error *error) {
+        return sd_bus_message_append(reply, "s", lssd_bus_ifname(userdata));
+}
+
+static int property_get_progress(sd_bus *bus, const char *path, const char *interface, const char *property,
+                                 sd_bus_message *reply, void *userdata, sd_bus_error *error) {
+        return sd_bus_message_append(reply, "d", lssd_bus_progress(userdata));
+}
 
 static int property_get_state(sd_bus *bus, const char *path, const char *interface, const char *property,
                               sd_bus_message *reply, void *userdata, sd_bus_error *error) {
@@ -30,7 +41,7 @@ static int property_get_job(sd_bus *bus, const char *path, const char *interface
 
 static int property_get_last_pass(sd_bus *bus, const char *path, const char *interface, const char *property,
                                   sd_bus_message *reply, void *userdata, sd_bus_error *error) {
-        const lssd_pass_record *p = &((const lssd_bus *) userdata)->last_pass;
+        const lssd_pass_record *p = &lssd_bus_job_env(userdata)->last_pass;
         int r = sd_bus_message_open_container(reply, 'r', "ttssa{su}");
         if (r >= 0)
                 r = sd_bus_message_append(reply, "ttss", p->started_us, p->duration_us,
@@ -49,29 +60,17 @@ static int property_get_last_pass(sd_bus *bus, const char *path, const char *int
 static int property_get_queue_length(sd_bus *bus, const char *path, const char *interface, const char *property,
                                      sd_bus_message *reply, void *userdata, sd_bus_error *error) {
         const lssd_bus *b = userdata;
-        return sd_bus_message_append(reply, "u", (uint32_t) b->queue.n);
+        return sd_bus_message_append(reply, "u", (uint32_t) lssd_bus_queue_length(b));
 }
 
-/* Check the bus can take it, queue. Takes over j in every case. */
-static int queue_job(lssd_bus *b, sd_bus_message *m, lssd_job *j, bool raw, sd_bus_error *error) {
-        int r = lssd_bus_check_available(b, sd_bus_message_get_sender(m), raw, error);
-        if (r >= 0)
-                r = lssd_bus_submit(b, j, error);
-        if (r < 0) {
-                lssd_job_free(j);
-                return r;
-        }
-        return 1; /* the job answers */
-}
-
-/* Authorize, then queue_job(). */
+/* Authorize, then lssd_bus_queue_job(). */
 static int submit(lssd_bus *b, sd_bus_message *m, lssd_job *j, bool raw, sd_bus_error *error) {
-        int r = lssd_auth_check(&b->ctx->auth, m, error);
+        int r = lssd_auth_check(lssd_bus_auth(b), m, error);
         if (r < 0) {
                 lssd_job_free(j);
                 return r;
         }
-        return queue_job(b, m, j, raw, error);
+        return lssd_bus_queue_job(b, m, j, raw, error);
 }
 
 static int method_scan(sd_bus_message *m, void *userdata, sd_bus_error *error) {
@@ -87,8 +86,8 @@ static int method_scan(sd_bus_message *m, void *userdata, sd_bus_error *error) {
         r = lssd_job_new(LSSD_JOB_SCAN, m, &j);
         if (r < 0)
                 return r;
-        for (size_t i = 0; r >= 0 && i < b->config->n_devices; i++)
-                r = lssd_job_add_pair(j, b->config->devices[i].identity.vendor, b->config->devices[i].identity.product);
+        for (size_t i = 0; r >= 0 && i < lssd_bus_config_of(b)->n_devices; i++)
+                r = lssd_job_add_pair(j, lssd_bus_config_of(b)->devices[i].identity.vendor, lssd_bus_config_of(b)->devices[i].identity.product);
         if (r >= 0 && o.has_vendor)
                 r = lssd_job_add_pair(j, o.vendor, o.product);
         if (r < 0) {
@@ -123,12 +122,12 @@ int lssd_bus_method_assign(lssd_bus *b, sd_bus_message *m, const lss_identity *i
         lssd_job *j;
         int r;
 
-        r = lssd_auth_check(&b->ctx->auth, m, error);
+        r = lssd_auth_check(lssd_bus_auth(b), m, error);
         if (r < 0)
                 return r;
         /* never give a node-ID another device answers to; the job looks again, and probes */
-        if (!o->force && lssd_bus_device_with_node_id(b, node_id, id))
-                return lssd_taken_error(b, error, node_id, id, NULL);
+        if (!o->force && lssd_devices_with_node_id(lssd_bus_devices(b), node_id, id))
+                return lssd_taken_error(lssd_bus_job_env(b), error, node_id, id, NULL);
 
         r = lssd_job_new(LSSD_JOB_ASSIGN, m, &j);
         if (r < 0)
@@ -136,7 +135,7 @@ int lssd_bus_method_assign(lssd_bus *b, sd_bus_message *m, const lss_identity *i
         j->identity = *id;
         j->node_id = node_id;
         j->assign = *o;
-        return queue_job(b, m, j, false, error);
+        return lssd_bus_queue_job(b, m, j, false, error);
 }
 
 /* The same rules as AssignNodeId: authorized, then queued as a job */
@@ -175,7 +174,7 @@ static int method_auto_assign(sd_bus_message *m, void *userdata, sd_bus_error *e
         r = lssd_job_new(LSSD_JOB_AUTO_ASSIGN, m, &j);
         if (r < 0)
                 return r;
-        r = lssd_job_set_plan(j, b->config);
+        r = lssd_job_set_plan(j, lssd_bus_config_of(b));
         if (r < 0) {
                 lssd_job_free(j);
                 return r;
@@ -212,9 +211,9 @@ static int method_cancel(sd_bus_message *m, void *userdata, sd_bus_error *error)
         lssd_bus *b = userdata;
         int r;
 
-        if (!b->job || b->job->type == LSSD_JOB_RESET) /* nothing to cancel */
+        if (!lssd_bus_running_job(b) || lssd_bus_running_job(b)->type == LSSD_JOB_RESET) /* nothing to cancel */
                 return sd_bus_reply_method_return(m, NULL);
-        r = lssd_auth_check(&b->ctx->auth, m, error);
+        r = lssd_auth_check(lssd_bus_auth(b), m, error);
         if (r < 0)
                 return r;
         r = lssd_bus_cancel(b, sd_bus_message_get_sender(m), error);
@@ -228,9 +227,9 @@ static int method_acquire(sd_bus_message *m, void *userdata, sd_bus_error *error
         const char *sender = sd_bus_message_get_sender(m);
         int r;
 
-        if (b->holder_name && sender && strcmp(b->holder_name, sender) == 0)
+        if (lssd_bus_holder(b) && sender && strcmp(lssd_bus_holder(b), sender) == 0)
                 return sd_bus_reply_method_return(m, NULL);
-        r = lssd_auth_check(&b->ctx->auth, m, error);
+        r = lssd_auth_check(lssd_bus_auth(b), m, error);
         if (r < 0)
                 return r;
         r = lssd_bus_acquire(b, m, error);
@@ -243,9 +242,9 @@ static int method_release(sd_bus_message *m, void *userdata, sd_bus_error *error
         lssd_bus *b = userdata;
         int r;
 
-        if (!b->holder_name)
+        if (!lssd_bus_holder(b))
                 return sd_bus_reply_method_return(m, NULL);
-        r = lssd_auth_check(&b->ctx->auth, m, error);
+        r = lssd_auth_check(lssd_bus_auth(b), m, error);
         if (r < 0)
                 return r;
         r = lssd_bus_release(b, sd_bus_message_get_sender(m), error);
@@ -309,11 +308,11 @@ static int method_execute(sd_bus_message *m, void *userdata, sd_bus_error *error
 const sd_bus_vtable lssd_bus_vtable[] = {
         SD_BUS_VTABLE_START(0),
 
-        SD_BUS_PROPERTY("Interface", "s", NULL, offsetof(lssd_bus, ifname), SD_BUS_VTABLE_PROPERTY_CONST),
+        SD_BUS_PROPERTY("Interface", "s", property_get_interface, 0, SD_BUS_VTABLE_PROPERTY_CONST),
         SD_BUS_PROPERTY("State", "s", property_get_state, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("Bitrate", "u", property_get_bitrate, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("Job", "s", property_get_job, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
-        SD_BUS_PROPERTY("Progress", "d", NULL, offsetof(lssd_bus, progress), SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
+        SD_BUS_PROPERTY("Progress", "d", property_get_progress, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("LastPass", "(ttssa{su})", property_get_last_pass, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("QueueLength", "u", property_get_queue_length, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
 

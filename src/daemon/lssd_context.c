@@ -47,7 +47,7 @@ lssd_context *lssd_context_free(lssd_context *ctx) {
         free(ctx->buses);
         ctx->manager_slot = sd_bus_slot_unref(ctx->manager_slot);
         ctx->object_manager_slot = sd_bus_slot_unref(ctx->object_manager_slot);
-        ctx->bus = sd_bus_flush_close_unref(ctx->bus);
+        ctx->dbus = sd_bus_flush_close_unref(ctx->dbus);
         ctx->rtnl_source = sd_event_source_disable_unref(ctx->rtnl_source);
         ctx->stop_timeout = sd_event_source_disable_unref(ctx->stop_timeout);
         ctx->ready_timer = sd_event_source_disable_unref(ctx->ready_timer);
@@ -109,13 +109,66 @@ static void log_diag(const lssd_diag *d) {
                 log_warning("(%zu more configuration messages not shown)", d->n_dropped);
 }
 
+/* ---- what the buses need of the context ---- */
+
+static uint64_t host_next_job_id(void *userdata) {
+        lssd_context *ctx = userdata;
+        return ++ctx->next_job_id;
+}
+
+static bool host_stopping(void *userdata) {
+        const lssd_context *ctx = userdata;
+        return ctx->stopping;
+}
+
+static bool host_started(void *userdata) {
+        const lssd_context *ctx = userdata;
+        return ctx->started;
+}
+
+static void host_status_changed(void *userdata) {
+        lssd_ready_status(userdata, false);
+}
+
+static void host_boot_pass_done(void *userdata) {
+        lssd_ready_boot_pass_done(userdata);
+}
+
+static void host_removed(void *userdata, lssd_bus *b) {
+        lssd_context_bus_removed(userdata, b);
+}
+
+static void host_idle(void *userdata) {
+        lssd_context *ctx = userdata;
+        if (ctx->stopping)
+                lssd_context_check_stopped(ctx);
+}
+
+static const lssd_bus_host_ops bus_host_ops = {
+        .next_job_id = host_next_job_id,
+        .stopping = host_stopping,
+        .started = host_started,
+        .status_changed = host_status_changed,
+        .boot_pass_done = host_boot_pass_done,
+        .removed = host_removed,
+        .idle = host_idle,
+};
+
 static int context_add_bus(lssd_context *ctx, const lssd_bus_config *c) {
+        const lssd_bus_host host = {
+                .event = ctx->event,
+                .dbus = ctx->dbus,
+                .auth = &ctx->auth,
+                .args = &ctx->args,
+                .ops = &bus_host_ops,
+                .userdata = ctx,
+        };
         lssd_bus **a = realloc(ctx->buses, (ctx->n_buses + 1) * sizeof(*a));
         if (!a)
                 return -ENOMEM;
         ctx->buses = a;
         lssd_bus *b;
-        int r = lssd_bus_new(ctx, c, &b);
+        int r = lssd_bus_new(&host, c, &b);
         if (r < 0)
                 return r;
         ctx->buses[ctx->n_buses++] = b;
@@ -138,16 +191,16 @@ int lssd_context_apply_config(lssd_context *ctx, lssd_config *config) {
 
         for (size_t i = 0; i < ctx->n_buses; i++) {
                 lssd_bus *b = ctx->buses[i];
-                const lssd_bus_config *c = lssd_config_find_bus(config, b->ifname);
+                const lssd_bus_config *c = lssd_config_find_bus(config, lssd_bus_ifname(b));
                 if (c) {
-                        if (b->removing) {
-                                b->removing = false;
+                        if (lssd_bus_removing(b)) {
+                                lssd_bus_set_removing(b, false);
                                 changed = true;
                         }
                         lssd_bus_set_config(b, c);
-                } else if (!b->removing) {
-                        log_info("%s: no longer in the configuration, removing", b->ifname);
-                        b->removing = true;
+                } else if (!lssd_bus_removing(b)) {
+                        log_info("%s: no longer in the configuration, removing", lssd_bus_ifname(b));
+                        lssd_bus_set_removing(b, true);
                         changed = true;
                         lssd_bus_stop(b, "The bus was removed from the configuration");
                 }
@@ -213,7 +266,7 @@ int lssd_context_reload(lssd_context *ctx, sd_bus_error *error) {
 
 lssd_bus *lssd_context_find_bus(lssd_context *ctx, const char *ifname) {
         for (size_t i = 0; i < ctx->n_buses; i++)
-                if (strcmp(ctx->buses[i]->ifname, ifname) == 0)
+                if (strcmp(lssd_bus_ifname(ctx->buses[i]), ifname) == 0)
                         return ctx->buses[i];
         return NULL;
 }
@@ -225,16 +278,16 @@ void lssd_context_bus_removed(lssd_context *ctx, lssd_bus *b) {
                         ctx->n_buses--;
                         break;
                 }
-        log_info("%s: removed", b->ifname);
+        log_info("%s: removed", lssd_bus_ifname(b));
         lssd_bus_free(b);
         lssd_context_emit_buses_changed(ctx);
         lssd_ready_status(ctx, false);
 }
 
 static void lssd_context_emit_buses_changed(lssd_context *ctx) {
-        if (!ctx->bus || !ctx->manager_slot)
+        if (!ctx->dbus || !ctx->manager_slot)
                 return;
-        int r = sd_bus_emit_properties_changed(ctx->bus, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE, "Buses", NULL);
+        int r = sd_bus_emit_properties_changed(ctx->dbus, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE, "Buses", NULL);
         if (r < 0)
                 log_debug("Failed to emit PropertiesChanged for Buses: %s", strerror(-r));
 }
@@ -284,21 +337,21 @@ int lssd_context_dump_links(lssd_context *ctx) {
 int lssd_context_connect_bus(lssd_context *ctx) {
         int r;
 
-        r = sd_bus_open_system(&ctx->bus);
+        r = sd_bus_open_system(&ctx->dbus);
         if (r < 0)
                 return log_error_errno(r, "Failed to connect to the system bus");
-        (void) sd_bus_set_description(ctx->bus, "lssd");
-        r = sd_bus_attach_event(ctx->bus, ctx->event, SD_EVENT_PRIORITY_NORMAL);
+        (void) sd_bus_set_description(ctx->dbus, "lssd");
+        r = sd_bus_attach_event(ctx->dbus, ctx->event, SD_EVENT_PRIORITY_NORMAL);
         if (r < 0)
                 return log_error_errno(r, "Failed to attach the bus to the event loop");
         /* without the bus nobody can reach us: exit and let systemd restart us */
-        r = sd_bus_set_exit_on_disconnect(ctx->bus, true);
+        r = sd_bus_set_exit_on_disconnect(ctx->dbus, true);
         if (r < 0)
                 return log_error_errno(r, "Failed to set exit-on-disconnect");
-        r = sd_bus_add_object_manager(ctx->bus, &ctx->object_manager_slot, LSSD_ROOT_PATH);
+        r = sd_bus_add_object_manager(ctx->dbus, &ctx->object_manager_slot, LSSD_ROOT_PATH);
         if (r < 0)
                 return log_error_errno(r, "Failed to add the object manager");
-        r = sd_bus_add_object_vtable(ctx->bus, &ctx->manager_slot, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE,
+        r = sd_bus_add_object_vtable(ctx->dbus, &ctx->manager_slot, LSSD_MANAGER_PATH, LSSD_MANAGER_IFACE,
                                      lssd_manager_vtable, ctx);
         if (r < 0)
                 return log_error_errno(r, "Failed to register the manager object");
@@ -317,9 +370,9 @@ static pid_t name_owner_pid(sd_bus *bus, const char *name) {
 }
 
 int lssd_context_request_name(lssd_context *ctx) {
-        int r = sd_bus_request_name(ctx->bus, LSSD_BUS_NAME, 0);
+        int r = sd_bus_request_name(ctx->dbus, LSSD_BUS_NAME, 0);
         if (r == -EEXIST) {
-                pid_t pid = name_owner_pid(ctx->bus, LSSD_BUS_NAME);
+                pid_t pid = name_owner_pid(ctx->dbus, LSSD_BUS_NAME);
                 if (pid > 0)
                         log_error("lssd is already running (PID %d owns %s): exiting without touching any bus",
                                   (int) pid, LSSD_BUS_NAME);
@@ -341,11 +394,11 @@ int lssd_context_request_name(lssd_context *ctx) {
 static void context_exit(lssd_context *ctx) {
         if (sd_event_get_state(ctx->event) == SD_EVENT_FINISHED)
                 return;
-        if (ctx->bus) {
-                int r = sd_bus_release_name(ctx->bus, LSSD_BUS_NAME);
+        if (ctx->dbus) {
+                int r = sd_bus_release_name(ctx->dbus, LSSD_BUS_NAME);
                 if (r < 0)
                         log_debug("Failed to release %s: %s", LSSD_BUS_NAME, strerror(-r));
-                (void) sd_bus_flush(ctx->bus);
+                (void) sd_bus_flush(ctx->dbus);
         }
         log_info("Stopped");
         (void) sd_event_exit(ctx->event, 0);

@@ -11,41 +11,18 @@
 
 #include "can/rtnl_watch.h"
 #include "config/lssd_config.h"
+#include "daemon/lssd_args.h"
 #include "daemon/lssd_auth.h"
+#include "daemon/lssd_bus.h"
 #include "daemon/lssd_ready.h"
 
 #define LSSD_DEFAULT_CONFIG   "/etc/lssd/lssd.conf"
-#define LSSD_QUEUE_MAX_DEFAULT 128u
 #define LSSD_STOP_TIMEOUT_USEC (5u * 1000000u)
 
-typedef struct lssd_bus lssd_bus;
-
-/* An in-memory slave for `--simulate` (tests and demos without SocketCAN). */
-typedef struct lssd_sim_slave {
-        char ifname[16];
-        lss_identity id;
-        uint8_t node_id;
-} lssd_sim_slave;
-
-/* What the command line asked for. */
-typedef struct lssd_args {
-        char *config_path;         /* NULL: the default file if it exists */
-        bool config_explicit;      /* --config given: the file must exist */
-        char **buses;              /* --bus, in order */
-        size_t n_buses;
-        lssd_sim_slave *sim_slaves;
-        size_t n_sim_slaves;
-        bool simulate;             /* every bus is an in-memory one */
-        bool check_config;
-        size_t queue_max;
-        unsigned lss_timeout_ms;   /* --lss-timeout for --bus buses, 0 = the default */
-} lssd_args;
-
-void lssd_args_done(lssd_args *a);
 
 typedef struct lssd_context {
         sd_event *event;
-        sd_bus *bus;
+        sd_bus *dbus;              /* the D-Bus connection (a CAN bus is a lssd_bus) */
         sd_bus_slot *manager_slot, *object_manager_slot;
         rtnl_watch *rtnl;
         sd_event_source *rtnl_source;
@@ -104,4 +81,14 @@ void lssd_context_stop(lssd_context *ctx);
 /* A bus went idle: finish stopping when all are. */
 void lssd_context_check_stopped(lssd_context *ctx);
 
+/* ---- READY=1 and STATUS= (lssd_context_ready.c; the wait itself is lssd_ready.h) ---- */
 
+/* The status line (and READY=1 with `ready`, only the first time). */
+void lssd_ready_status(lssd_context *ctx, bool ready);
+/* Start-up is done: READY=1 now, or once every boot auto-assign pass on a
+ * bus that is up finished or gave up (a bus that is not there does not hold
+ * it back: STATUS= says it is waited for; one that is there but down holds it
+ * for LSSD_LINK_GRACE_USEC, then no more), at the latest at the limits of lssd_ready.h. */
+void lssd_ready_startup_done(lssd_context *ctx);
+/* A bus's boot pass ended. */
+void lssd_ready_boot_pass_done(lssd_context *ctx);

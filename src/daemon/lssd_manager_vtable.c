@@ -22,9 +22,9 @@ static int property_get_buses(sd_bus *bus, const char *path, const char *interfa
         if (r < 0)
                 return r;
         for (size_t i = 0; i < ctx->n_buses; i++) {
-                if (ctx->buses[i]->removing)
+                if (lssd_bus_removing(ctx->buses[i]))
                         continue;
-                r = sd_bus_message_append(reply, "o", ctx->buses[i]->path);
+                r = sd_bus_message_append(reply, "o", lssd_bus_object_path(ctx->buses[i]));
                 if (r < 0)
                         return r;
         }
@@ -43,9 +43,9 @@ static int method_get_bus(sd_bus_message *m, void *userdata, sd_bus_error *error
         if (r < 0)
                 return r;
         lssd_bus *b = lssd_context_find_bus(ctx, ifname);
-        if (!b || b->removing)
+        if (!b || lssd_bus_removing(b))
                 return sd_bus_error_setf(error, LSSD_ERROR_NOT_FOUND, "lssd does not serve a bus '%s'", ifname);
-        return sd_bus_reply_method_return(m, "o", b->path);
+        return sd_bus_reply_method_return(m, "o", lssd_bus_object_path(b));
 }
 
 static int method_reload_config(sd_bus_message *m, void *userdata, sd_bus_error *error) {

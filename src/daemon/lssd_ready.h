@@ -11,8 +11,6 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-typedef struct lssd_context lssd_context;
-
 #define LSSD_READY_TICK_USEC (1u * 1000000u)              /* how often the wait looks at the passes */
 #define LSSD_EXTEND_EVERY_USEC (10u * 1000000u)           /* how often a running pass extends */
 #define LSSD_EXTEND_BY_USEC (30u * 1000000u)              /* by how much each time */
@@ -49,13 +47,3 @@ void lssd_ready_wait_start(lssd_ready_wait *w, uint64_t now, uint64_t steps);
  * the buses in their boot pass. */
 lssd_ready_verdict lssd_ready_wait_tick(lssd_ready_wait *w, uint64_t now, bool hold, bool running, uint64_t steps,
                                         uint64_t limit_usec, uint64_t stall_usec);
-
-/* The status line (and READY=1 with `ready`, only the first time). */
-void lssd_ready_status(lssd_context *ctx, bool ready);
-/* Start-up is done: READY=1 now, or once every boot auto-assign pass on a
- * bus that is up finished or gave up (a bus that is not there does not hold
- * it back: STATUS= says it is waited for; one that is there but down holds it
- * for LSSD_LINK_GRACE_USEC, then no more), at the latest at the limits above. */
-void lssd_ready_startup_done(lssd_context *ctx);
-/* A bus's boot pass ended. */
-void lssd_ready_boot_pass_done(lssd_context *ctx);

@@ -36,3 +36,12 @@ static inline void test_bus_free(sd_bus *bus) {
                 ck_assert_int_ge(sd_bus_message_seal((m), 1, 0), 0);                                             \
                 ck_assert_int_ge(sd_bus_message_rewind((m), 1), 0);                                              \
         } while (0)
+
+/* main() of a unit test: runs the suite, exit status for meson. */
+static inline int test_run_suite(Suite *s) {
+        SRunner *sr = srunner_create(s);
+        srunner_run_all(sr, CK_NORMAL);
+        int failed = srunner_ntests_failed(sr);
+        srunner_free(sr);
+        return failed == 0 ? 0 : 1;
+}

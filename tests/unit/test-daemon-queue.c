@@ -8,7 +8,7 @@
 
 #include "daemon/lssd_auth.h"
 #include "daemon/lssd_device.h"
-#include "daemon/lssd_job.h"
+#include "daemon/lssd_job_queue.h"
 #include "daemon/lssd_path.h"
 #include "daemon/lssd_simbus.h"
 

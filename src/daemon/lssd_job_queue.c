@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "daemon/lssd_job.h"
+#include "daemon/lssd_job_queue.h"
 
 const char *lssd_job_name(const lssd_job *j) {
         switch (j->type) {
@@ -169,4 +169,12 @@ lssd_job *lssd_job_queue_pop(lssd_job_queue *q) {
         if (j)
                 lssd_job_queue_remove(q, j);
         return j;
+}
+
+bool lssd_job_uncancellable(const lssd_job *j) {
+        return j && j->type == LSSD_JOB_SET_BITRATE && j->stage > j->n_pairs;
+}
+
+bool lssd_job_retuning(const lssd_job *j, uint64_t now) {
+        return j && j->type == LSSD_JOB_SET_BITRATE && j->retune_until > now;
 }

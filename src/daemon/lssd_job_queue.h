@@ -83,6 +83,14 @@ struct lssd_job {
         int retune_error;            /* errno of a failed host retune */
 };
 
+/* A SET_BITRATE job in its bit-rate procedure (the scan before it is over):
+ * not cancelled (Cancel, stop) while its engine operation runs, as cut off
+ * it could leave devices with a pending rate or the bus split; it ends
+ * within seconds. */
+bool lssd_job_uncancellable(const lssd_job *j);
+/* Link down/up events at `now` are the job's own host retune: not a failure. */
+bool lssd_job_retuning(const lssd_job *j, uint64_t now);
+
 /* "Reset", "Scan", "AssignNodeId", the raw method name, "Execute", "AutoAssign",
  * "SetBitrate", "UnassignNodeId". */
 const char *lssd_job_name(const lssd_job *j);

@@ -1,0 +1,287 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <errno.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <time.h>
+
+#include "daemon/lssd_bus_private.h"
+#include "daemon/lssd_run.h"
+#include "daemon/lssd_log.h"
+#include "daemon/lssd_path.h"
+
+/* ---- driving the engine ---- */
+
+static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata);
+
+static void bus_arm_timer(lssd_bus *b) {
+        uint64_t t = lss_master_deadline(b->engine);
+        if (b->sim) {
+                uint64_t s = lssd_simbus_next_event(b->sim);
+                if (s < t)
+                        t = s;
+        }
+        if (t == UINT64_MAX) {
+                (void) sd_event_source_set_enabled(b->timer_source, SD_EVENT_OFF);
+                return;
+        }
+        int r = sd_event_source_set_time(b->timer_source, t);
+        if (r >= 0)
+                r = sd_event_source_set_enabled(b->timer_source, SD_EVENT_ONESHOT);
+        if (r < 0)
+                log_error("%s: failed to arm the timer: %s", b->ifname, strerror(-r));
+}
+
+/* Sends what the engine wants sent. A transport error ends the running
+ * operation (the frames behind the failed one are dropped, never reordered). */
+static void bus_flush_tx(lssd_bus *b) {
+        lss_frame f;
+        uint64_t sent_at = 0;
+        int err = 0;
+
+        while (lss_master_next_tx(b->engine, &f)) {
+                if (err < 0)
+                        continue;
+                /* An answer may arrive before send() even returns (a slave on
+                 * another CPU, a virtual bus): the frame counts as sent when
+                 * we hand it over, or the engine would take the answer for a
+                 * stale frame. */
+                uint64_t t = bus_now(b);
+                int r = lss_transport_send(&b->transport, &f);
+                if (r < 0)
+                        err = r;
+                else {
+                        sent_at = t;
+                        lssd_heard_tx(&b->heard, &f);
+                        if (f.id == LSS_COB_MASTER && f.flags == 0) {
+                                b->echo_want = f;
+                                b->echo_want_at = t;
+                                b->echo_pending = true;
+                        }
+                }
+        }
+        /* only when something went out: on_sent() restarts the running wait */
+        if (sent_at > 0)
+                lss_master_on_sent(b->engine, sent_at);
+        if (err >= 0)
+                return;
+        uint64_t now = bus_now(b);
+
+        char why[128];
+        enum lss_status st = b->bus_state == LSS_BUS_OFF ? LSS_E_BUS_OFF : LSS_E_BUS_DOWN;
+        if (err == -ENETDOWN)
+                snprintf(why, sizeof(why), "%s is down", b->ifname);
+        else if (err == -ENODEV || err == -ENXIO)
+                snprintf(why, sizeof(why), "%s does not exist", b->ifname);
+        else if (err == -ETIMEDOUT)
+                snprintf(why, sizeof(why), "%s: transmit queue stayed full (is any other node acknowledging?)",
+                         b->ifname);
+        else
+                snprintf(why, sizeof(why), "%s: send failed: %s", b->ifname, strerror(-err));
+        log_warning("%s", why);
+        lss_master_on_bus_error(b->engine, st, why, now);
+        while (lss_master_next_tx(b->engine, &f))
+                ;
+}
+
+static void bus_job_end(lssd_bus *b) {
+        lssd_job *j = b->job;
+        const lss_master_stats *st = lss_master_get_stats(b->engine);
+        log_debug("%s: %s finished (%s); engine: %" PRIu64 " steps, %" PRIu64 " retries, %" PRIu64
+                  " timeouts, %" PRIu64 " late, %" PRIu64 " stale, %" PRIu64 " ignored, %" PRIu64
+                  " conflicts, wait %u us, latency %u..%u us", b->ifname, lssd_job_name(j),
+                  j->result ? j->result : "failed", st->steps, st->retries, st->timeouts, st->late_answers,
+                  st->stale_frames, st->ignored_frames, st->conflicts, st->timeout_us, st->latency_min_us,
+                  st->latency_max_us);
+        if (st->patience_us)
+                log_notice("%s: devices answered later than lss_timeout_ms = %u allows (%" PRIu64
+                           " late, %" PRIu64 " after their step had ended): waited up to %u ms",
+                           b->ifname, b->config->lss_timeout_ms, st->late_answers, st->stray_answers,
+                           (unsigned) us_to_ms_up(st->patience_us));
+        b->job = NULL;
+        b->changed |= LSSD_BUS_CHANGED_JOB;
+        bus_set_progress(b, 0);
+        if (j->type == LSSD_JOB_AUTO_ASSIGN && j->boot) {
+                /* finished or gave up: either way the boot pass is over */
+                char *text = NULL;
+                if (j->summary[0] && j->result && strcmp(j->result, "partial") != 0 &&
+                    strcmp(j->result, "done") != 0) {
+                        if (asprintf(&text, "%s: auto-assign gave up (%s)", b->ifname, j->result) < 0)
+                                text = NULL;
+                } else if (j->summary[0])
+                        text = strdup(j->summary);
+                else if (asprintf(&text, "%s: auto-assign %s", b->ifname, j->result ? j->result : "failed") < 0)
+                        text = NULL;
+                free(b->boot_status);
+                b->boot_status = text;
+                b->env.boot_pending = false;
+                b->host.ops->boot_pass_done(b->host.userdata);
+        }
+        /* the boot pass has no caller but its end matters to everybody */
+        if ((j->request || j->type == LSSD_JOB_AUTO_ASSIGN) && b->host.dbus && b->slot)
+                (void) sd_bus_emit_signal(b->host.dbus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss", lssd_job_name(j),
+                                          j->result ? j->result : "failed");
+        lssd_job_free(j);
+}
+
+static void bus_job_continue(lssd_bus *b, const lss_result *r) {
+        int k = lssd_job_run(&b->env, b->job, r);
+        if (k > 0)
+                b->engine_running = true;
+        else
+                bus_job_end(b);
+}
+
+static void bus_job_begin(lssd_bus *b, lssd_job *j) {
+        b->job = j;
+        j->stage = 0;
+        b->changed |= LSSD_BUS_CHANGED_JOB | LSSD_BUS_CHANGED_QUEUE_LENGTH;
+        bus_set_progress(b, 0);
+        bus_job_continue(b, NULL);
+}
+
+static int on_remove(sd_event_source *s, void *userdata) {
+        lssd_bus *b = userdata;
+        b->host.ops->removed(b->host.userdata, b);
+        return 0;
+}
+
+/* Everything that may have moved the engine ends here: send, collect the
+ * result, continue the job or start the next one, re-arm the timer, publish. */
+void bus_process(lssd_bus *b) {
+        if (b->processing)
+                return;
+        b->processing = true;
+        for (;;) {
+                bus_flush_tx(b);
+                /* SetBitrate: the engine is silent and waits for the host interface */
+                if (b->engine_running && lss_master_retune_wanted(b->engine, NULL, NULL)) {
+                        if (bus_retune(b))
+                                bus_update_io(b, true);
+                        continue;
+                }
+                if (b->engine_running && lss_master_done(b->engine)) {
+                        b->engine_running = false;
+                        bus_job_continue(b, lss_master_result(b->engine));
+                        continue;
+                }
+                if (!b->job && !b->engine_running && b->queue.n > 0) {
+                        bus_job_begin(b, lssd_job_queue_pop(&b->queue));
+                        continue;
+                }
+                break;
+        }
+        b->processing = false;
+
+        bus_arm_timer(b);
+        bus_update_published(b);
+        bus_flush_changes(b);
+
+        if (lssd_bus_idle(b)) {
+                if (b->removing && !b->remove_source) {
+                        int r = sd_event_add_defer(b->host.event, &b->remove_source, on_remove, b);
+                        if (r < 0)
+                                log_error("%s: failed to schedule removal: %s", b->ifname, strerror(-r));
+                }
+                b->host.ops->idle(b->host.userdata);
+        }
+}
+
+/* Our own request came back from the controller. Only the echo of the last
+ * one written confirms the running step; an older identical request's echo
+ * is told apart by its time (a receive time may read up to the clock
+ * conversion's error early, hence the slack). */
+static void bus_on_echo(lssd_bus *b, const lss_frame *f, uint64_t rx) {
+        if (!b->echo_pending || f->id != b->echo_want.id || f->len != b->echo_want.len ||
+            memcmp(f->data, b->echo_want.data, sizeof(f->data)) != 0)
+                return;
+        if (rx + ECHO_CLOCK_SLACK_US < b->echo_want_at)
+                return;
+        b->echo_pending = false;
+        lss_master_on_tx_confirmed(b->engine, rx);
+}
+
+static void bus_note_bootup(lssd_bus *b, const lss_frame *f, uint64_t rx) {
+        uint8_t node, state;
+        if (rx <= b->env.unstored_until && bootup_decode(f, &node, &state) && state == 0)
+                b->env.unstored[node] = true;
+}
+
+static void bus_poll_rx(lssd_bus *b) {
+        lss_frame f;
+        uint64_t rx;
+        int r = 0;
+
+        for (unsigned i = 0; i < RX_BATCH; i++) {
+                r = lss_transport_recv(&b->transport, &f, &rx);
+                if (r <= 0)
+                        break;
+                if (f.flags & LSS_FRAME_ECHO)
+                        bus_on_echo(b, &f, rx);
+                else {
+                        bus_note_bootup(b, &f, rx);
+                        lssd_heard_rx(&b->heard, &f, lssd_realtime_us());
+                        lss_master_on_frame(b->engine, &f, rx);
+                }
+        }
+        if (r < 0 && r != -EAGAIN && r != -EINTR && r != -ENETDOWN && r != -ENODEV)
+                log_debug("%s: receive failed: %s", b->ifname, strerror(-r));
+}
+
+static void bus_check_status(lssd_bus *b) {
+        lss_transport_status st;
+        if (lss_transport_status_get(&b->transport, &st) < 0)
+                return;
+        uint64_t now = bus_now(b);
+        if (st.rx_dropped != b->rx_dropped) {
+                log_warning("%s: %" PRIu64 " received frames were lost", b->ifname, st.rx_dropped - b->rx_dropped);
+                b->rx_dropped = st.rx_dropped;
+                lss_master_on_rx_lost(b->engine, now);
+        }
+        if (st.bus != b->bus_state) {
+                log_notice("%s: controller %s", b->ifname, lss_bus_state_to_string(st.bus));
+                b->bus_state = st.bus;
+                if (st.bus == LSS_BUS_OFF && b->engine_running)
+                        lss_master_on_bus_error(b->engine, LSS_E_BUS_OFF, "the controller went bus-off", now);
+        }
+}
+
+void bus_update_io(lssd_bus *b, bool force) {
+        int fd = lss_transport_get_fd(&b->transport);
+        /* a new socket may echo or not; the engine applies it from its next step */
+        lss_master_set_tx_confirm(b->engine, b->port && socketcan_port_echoes(b->port));
+        if (fd != b->io_fd)
+                b->echo_pending = false;
+        if (fd == b->io_fd && !force)
+                return;
+        b->io_source = sd_event_source_disable_unref(b->io_source);
+        b->io_fd = -1;
+        if (fd < 0)
+                return;
+        int r = sd_event_add_io(b->host.event, &b->io_source, fd, EPOLLIN, on_io, b);
+        if (r < 0) {
+                log_error("%s: failed to watch the socket: %s", b->ifname, strerror(-r));
+                return;
+        }
+        b->io_fd = fd;
+}
+
+static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata) {
+        lssd_bus *b = userdata;
+        bus_poll_rx(b);
+        bus_check_status(b);
+        bus_update_io(b, false);
+        bus_process(b);
+        return 0;
+}
+
+int bus_on_timer(sd_event_source *s, uint64_t usec, void *userdata) {
+        lssd_bus *b = userdata;
+        if (b->io_fd < 0)
+                bus_poll_rx(b); /* simulated bus: frames are picked up on time */
+        lss_master_on_time(b->engine, bus_now(b));
+        bus_process(b);
+        return 0;
+}

@@ -1,0 +1,128 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <errno.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "daemon/lssd_bus_private.h"
+#include "daemon/lssd_log.h"
+#include "daemon/lssd_path.h"
+
+/* ---- link ---- */
+
+/* SetBitrate: the engine is silent and waits for the host interface to be
+ * retuned: do it (rtnetlink on a real controller, the simulated bus with
+ * --simulate; skipped on vcan) and tell the engine. Returns true when the
+ * socket changed. */
+bool bus_retune(lssd_bus *b) {
+        lssd_job *j = b->job;
+        enum lss_retune how = LSS_RETUNE_FAILED;
+        uint32_t rate;
+        uint64_t deadline, now, done;
+        bool reopened = false;
+        int r;
+
+        if (!lss_master_retune_wanted(b->engine, &rate, &deadline))
+                return false;
+        now = bus_now(b);
+        if (!j || j->type != LSSD_JOB_SET_BITRATE || !b->config->bitrate_change) {
+                if (j)
+                        j->retune_error = EPERM;
+        } else if (b->sim) {
+                lssd_simbus_set_bitrate(b->sim, rate);
+                how = LSS_RETUNE_DONE;
+        } else if (b->link_virtual) {
+                how = LSS_RETUNE_SKIPPED;
+        } else {
+                j->retune_until = now + RETUNE_LINK_GRACE_US;
+                r = rtnl_set_can_bitrate(NULL, b->ifname, rate);
+                if (r == 0) {
+                        how = LSS_RETUNE_DONE;
+                        /* the old socket carries a pending ENETDOWN from the link going down */
+                        if (b->port) {
+                                r = socketcan_port_reopen(b->port);
+                                if (r < 0)
+                                        log_warning("%s: re-opening after the retune failed: %s", b->ifname,
+                                                    strerror(-r));
+                                reopened = true;
+                        }
+                } else if (r == -EOPNOTSUPP) {
+                        how = LSS_RETUNE_SKIPPED;
+                } else {
+                        j->retune_error = -r;
+                        log_error("%s: retuning the interface to %u bit/s failed: %s%s", b->ifname, rate,
+                                  strerror(-r), r == -EPERM ? " (lssd needs CAP_NET_ADMIN for bit-rate changes: "
+                                                              "see the lssd-bitrate.conf drop-in)" : "");
+                }
+        }
+        done = bus_now(b);
+        if (how == LSS_RETUNE_DONE && done > deadline)
+                log_warning("%s: the interface was retuned %llu us after the slaves switched", b->ifname,
+                            (unsigned long long) (done - deadline));
+        log_info("%s: SetBitrate: host interface retune: %s (%llu us)", b->ifname, lss_retune_name(how),
+                 (unsigned long long) (done - now));
+        lss_master_retune_done(b->engine, how, done);
+        return reopened;
+}
+
+void bus_on_link_state(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata) {
+        lssd_bus *b = userdata;
+        /* the fd is still open now but not after we return: forget it here */
+        if (new_state == LSS_LINK_GONE) {
+                b->io_source = sd_event_source_disable_unref(b->io_source);
+                b->io_fd = -1;
+        }
+        b->link_changed = true;
+}
+
+static void bus_after_link_change(lssd_bus *b) {
+        lss_link_state old = b->link, now_state = socketcan_port_state(b->port);
+        b->link_changed = false;
+        b->link = now_state;
+        bus_update_io(b, true);
+        if (old == now_state)
+                return;
+
+        if (lssd_job_retuning(b->job, bus_now(b))) {
+                /* our own retune (down, bit timing, up): the job goes on */
+                log_info("%s: link %s (SetBitrate retune)", b->ifname, lss_link_state_to_string(now_state));
+                bus_process(b);
+                return;
+        }
+        if (now_state == LSS_LINK_GONE)
+                log_notice("%s: link gone: no interface %s any more; served again when it appears", b->ifname,
+                           b->ifname);
+        else
+                log_notice("%s: link %s", b->ifname, lss_link_state_to_string(now_state));
+        if (now_state != LSS_LINK_UP && b->engine_running) {
+                char why[64];
+                snprintf(why, sizeof(why), "%s went %s", b->ifname, lss_link_state_to_string(now_state));
+                lss_master_on_bus_error(b->engine, LSS_E_BUS_DOWN, why, bus_now(b));
+        }
+        /* whatever happened while we could not talk: the first frame is switch-global waiting */
+        if (now_state == LSS_LINK_UP) {
+                bus_queue_reset(b, true);
+                bus_queue_boot_pass(b);
+        }
+        bus_process(b);
+}
+
+void lssd_bus_link_event(lssd_bus *b, const rtnl_link *link) {
+        if (!b->port)
+                return;
+        if (link->ifname[0] && strcmp(link->ifname, b->ifname) == 0 && !link->removed) {
+                uint32_t rate = strcmp(link->kind, "can") == 0 ? link->bitrate : 0;
+                bool virt = strcmp(link->kind, "vcan") == 0 || strcmp(link->kind, "vxcan") == 0;
+                if (rate != b->link_bitrate || virt != b->link_virtual) {
+                        b->link_bitrate = rate;
+                        b->link_virtual = virt;
+                        bus_update_timing(b);
+                        bus_update_published(b);
+                        bus_flush_changes(b);
+                }
+        }
+        int r = socketcan_port_link_event(b->port, link->ifindex, link->ifname, !link->removed, link->flags);
+        if (r < 0)
+                log_warning("%s: failed to re-open: %s", b->ifname, strerror(-r));
+        if (r != 0 || b->link_changed)
+                bus_after_link_change(b);
+}

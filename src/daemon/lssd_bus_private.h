@@ -1,0 +1,105 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* Inside a bus: struct lssd_bus and what its files (lssd_bus*.c) share.
+ * Nothing but those files includes this header. */
+#pragma once
+
+#include "can/socketcan.h"
+#include "can/transport.h"
+#include "daemon/lssd_bus.h"
+#include "daemon/lssd_heard.h"
+#include "daemon/lssd_holder.h"
+#include "daemon/lssd_simbus.h"
+
+/* Frames read per wake-up before the other buses get their turn. */
+#define RX_BATCH 64u
+/* how much earlier than its write an echo may read (clock conversion error), see bus_on_echo() */
+#define ECHO_CLOCK_SLACK_US 1000u
+/* Link events this long after our own retune are taken for it. */
+#define RETUNE_LINK_GRACE_US (5u * 1000000u)
+
+/* Bus PropertiesChanged bookkeeping. */
+#define LSSD_BUS_CHANGED_STATE        (1u << 0)
+#define LSSD_BUS_CHANGED_BITRATE      (1u << 1)
+#define LSSD_BUS_CHANGED_JOB          (1u << 2)
+#define LSSD_BUS_CHANGED_PROGRESS     (1u << 3)
+#define LSSD_BUS_CHANGED_QUEUE_LENGTH (1u << 4)
+#define LSSD_BUS_CHANGED_LAST_PASS    (1u << 5)
+
+struct lssd_bus {
+        lssd_bus_host host;              /* the daemon around it */
+        lssd_job_env env;                /* what the job runners see (points into this bus) */
+        char *ifname;
+        char *path;
+        lssd_bus_config *config;         /* own copy: a bus being removed outlives its configuration */
+
+        lss_transport transport;
+        socketcan_port *port;            /* behind transport, NULL when simulated */
+        lssd_simbus *sim;                /* behind transport when simulated */
+        sd_event_source *io_source;
+        int io_fd;
+        sd_event_source *timer_source;
+        lss_link_state link;
+        lss_bus_state bus_state;
+        uint64_t rx_dropped;
+        uint32_t link_bitrate;           /* from rtnetlink for real controllers, 0 otherwise */
+        bool link_virtual;               /* vcan/vxcan: frames take no time on the "wire" */
+        bool link_changed;               /* socketcan reported a change: handle it outside the callback */
+
+        lss_master *engine;
+        bool engine_running;             /* we started an operation and did not collect it yet */
+        lss_frame echo_want;             /* last LSS request written: its echo confirms it is on the wire */
+        uint64_t echo_want_at;           /* when it was written */
+        bool echo_pending;
+
+        lssd_job_queue queue;
+        lssd_job *job;                   /* running */
+        double progress;
+
+        lssd_holder holder;              /* Acquire() */
+
+        lssd_devices devices;            /* the registry */
+
+        sd_bus_slot *slot;
+        const char *state;               /* as published */
+        uint32_t bitrate;                /* as published */
+        uint32_t bitrate_set;            /* by SetBitrate: outlives reloads of the file's value; 0 none */
+        unsigned changed;                /* LSSD_BUS_CHANGED_* not yet signalled */
+        bool processing;                 /* bus_process() is on the stack */
+        bool removing;                   /* dropped from the configuration: free when idle */
+        sd_event_source *remove_source;  /* frees the bus outside of its own callbacks */
+
+        char *boot_status;               /* how the boot pass ended, for STATUS= */
+        lssd_heard heard;                /* node-IDs other devices speak under */
+};
+
+/* lssd_bus_lifecycle.c: the transport's clock, the engine's timing */
+uint64_t bus_now(lssd_bus *b);
+void bus_update_timing(lssd_bus *b);
+
+/* lssd_bus_publish.c: State, Bitrate, Job, Progress, ... and the engine's
+ * progress and finds */
+void bus_update_published(lssd_bus *b);
+void bus_flush_changes(lssd_bus *b);
+void bus_set_progress(lssd_bus *b, double p);
+void bus_on_engine_progress(void *userdata, double p);
+void bus_on_engine_found(void *userdata, const lss_device *d);
+
+/* lssd_bus_engine.c: frames in and out, the timer, the job at the head */
+void bus_process(lssd_bus *b);
+void bus_update_io(lssd_bus *b, bool force);
+int bus_on_timer(sd_event_source *s, uint64_t usec, void *userdata);
+
+/* lssd_bus_queue.c: what may be queued, the internal jobs */
+void bus_queue_reset(lssd_bus *b, bool front);
+void bus_queue_boot_pass(lssd_bus *b);
+
+/* lssd_bus_holder.c */
+void bus_on_holder_gone(lssd_holder *h, void *userdata);
+
+/* lssd_bus_link.c: the host interface */
+bool bus_retune(lssd_bus *b);
+void bus_on_link_state(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata);
+
+/* lssd_bus_views.c: what the registry and the job runners see */
+extern const lssd_devices_ops bus_devices_ops;
+extern const lssd_job_env_ops bus_env_ops;

@@ -1,0 +1,37 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* The job runners: what each kind of job does, one engine operation at a
+ * time, and how it answers its caller (lssd_run_<kind>.c, one file per kind;
+ * lssd_run.c picks the runner). They see the bus only as a lssd_job_env. */
+#pragma once
+
+#include "daemon/lssd_job_queue.h"
+#include "daemon/lssd_job_env.h"
+
+/* Begins a job (r == NULL) or continues it after its engine operation ended
+ * with result r. Returns 1 when another engine operation was started, 0 when
+ * the job is over: its reply is sent and j->result says how it ended. */
+int lssd_job_run(lssd_job_env *e, lssd_job *j, const lss_result *r);
+
+/* The runner of each kind of job, as lssd_job_run(). */
+int lssd_run_reset(lssd_job_env *e, lssd_job *j, const lss_result *r);
+int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r);
+int lssd_run_assign(lssd_job_env *e, lssd_job *j, const lss_result *r);
+int lssd_run_unassign(lssd_job_env *e, lssd_job *j, const lss_result *r);
+int lssd_run_raw(lssd_job_env *e, lssd_job *j, const lss_result *r);
+int lssd_run_execute(lssd_job_env *e, lssd_job *j, const lss_result *r);
+int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r);
+/* SetBitrate(), lssd_run_bitrate.c (see lssd_bitrate.h) */
+int lssd_run_bitrate(lssd_job_env *e, lssd_job *j, const lss_result *r);
+
+/* Starts stage j->stage of a scan: 0 the fastscan enumeration, then one
+ * slowscan per vendor/product pair of j->pairs. Negative errno on failure. */
+int lssd_scan_stage_start(lssd_job_env *e, const lssd_job *j);
+
+/* Tells the engine how many devices an enumeration will likely find: the
+ * non-configured devices seen before (for its progress). */
+void lssd_run_expect_finds(lssd_job_env *e);
+
+/* The engine confirmed a device during a scan job's stage
+ * (lss_master_set_found): its device object is created or updated and
+ * DeviceFound (and UnknownDevice) sent now, once per device and job. */
+void lssd_scan_found(lssd_job_env *e, lssd_job *j, const lss_device *f);

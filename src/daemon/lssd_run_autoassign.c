@@ -1,0 +1,236 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <stdio.h>
+#include <string.h>
+
+#include "daemon/lssd_errors.h"
+#include "daemon/lssd_job_reply.h"
+#include "daemon/lssd_run.h"
+#include "daemon/lssd_log.h"
+#include "daemon/lssd_taken.h"
+
+/* ---- AutoAssign: the engine's pass over the map ---- */
+
+/* A mapped device that is not there: the objects of it we know (any revision
+ * when the map has none) are missing; only when we know none is one made from
+ * the map's identity, so that the absence shows. */
+static bool autoassign_mark_missing(lssd_job_env *e, const lssd_job *j, const lss_outcome *o) {
+        bool marked = false;
+        for (size_t i = 0; i < j->plan.n_map; i++) {
+                const lss_map_entry *m = &j->plan.map[i];
+                if (!lss_map_entry_matches(m, &o->id))
+                        continue;
+                for (lssd_device *d = e->devices->head; d; d = d->next)
+                        if (lss_map_entry_matches(m, &d->id)) {
+                                d->missing = true;
+                                d->blocked = false;
+                                marked = true;
+                        }
+        }
+        return marked;
+}
+
+/* A missing device's identity is the map's: without a revision there, its
+ * revision (0) is not known. */
+static bool outcome_revision_known(const lssd_job *j, const lss_outcome *o) {
+        if (o->kind != LSS_OUTCOME_MISSING)
+                return true;
+        for (size_t i = 0; i < j->plan.n_map; i++)
+                if (lss_map_entry_matches(&j->plan.map[i], &o->id))
+                        return j->plan.map[i].revision_known;
+        return true;
+}
+
+/* Brings the Device object of one outcome up to date. */
+static void autoassign_publish_one(lssd_job_env *e, const lssd_job *j, const lss_outcome *o, uint64_t now_realtime) {
+        bool missing = o->kind == LSS_OUTCOME_MISSING;
+        uint8_t node_id = o->new_node_id != 0 ? o->new_node_id : LSS_NODE_ID_UNCONFIGURED;
+        lssd_device *d = NULL;
+        char ident[40];
+
+        if (missing && autoassign_mark_missing(e, j, o))
+                return;
+        int k = lssd_devices_get(e->devices, &o->id, outcome_revision_known(j, o), node_id, lssd_realtime_us(), &d);
+        if (k < 0) {
+                log_error("%s: failed to record device %s: %s", e->ifname,
+                          lssd_identity_format(&o->id, ident, sizeof(ident)), strerror(-k));
+                return;
+        }
+        if (!missing)
+                lssd_heard_owner(e->heard, node_id, &o->id);
+        if (!missing && o->new_node_id != 0 && d->node_id != o->new_node_id) {
+                d->node_id = o->new_node_id;
+                d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
+        }
+        if (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL) {
+                d->assigned = true;
+                d->pooled = o->kind == LSS_OUTCOME_POOL;
+        }
+        d->blocked = o->kind == LSS_OUTCOME_CONFLICT;
+        d->missing = missing;
+        if (!missing) {
+                d->last_seen = now_realtime;
+                d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
+        }
+}
+
+/* What an outcome needs said beyond its kind ("" when nothing): the
+ * journal line and the reply's detail. */
+static void outcome_detail(const lss_outcome *o, char *buf, size_t size) {
+        buf[0] = '\0';
+        if (o->not_stored)
+                snprintf(buf, size, "not stored (device cannot store: %s)", lss_store_error_name(o->err));
+        else if (o->message[0])
+                snprintf(buf, size, "%s", o->message);
+}
+
+static bool outcome_changed(const lss_outcome *o) {
+        return (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL) && !o->dry;
+}
+
+/* The reply's and the journal's name: a dry run's changes are "would-..." */
+static const char *outcome_name(const lss_outcome *o) {
+        if (o->dry)
+                return o->kind == LSS_OUTCOME_POOL ? "would-pool" : "would-assign";
+        return lss_outcome_name(o->kind);
+}
+
+static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_outcome *o) {
+        char ident[40], detail[200];
+        int priority = LOG_INFO;
+
+        if (outcome_revision_known(j, o))
+                lssd_identity_format(&o->id, ident, sizeof(ident));
+        else /* the map's identity without a revision: not 0 */
+                snprintf(ident, sizeof(ident), "%08x:%08x:-:%08x", o->id.vendor, o->id.product, o->id.serial);
+        switch (o->kind) {
+        case LSS_OUTCOME_ASSIGNED:
+        case LSS_OUTCOME_POOL:
+                priority = LOG_NOTICE;
+                break;
+        case LSS_OUTCOME_MISSING:
+        case LSS_OUTCOME_CONFLICT:
+        case LSS_OUTCOME_FAILED:
+                priority = LOG_WARNING;
+                break;
+        default:
+                break;
+        }
+        outcome_detail(o, detail, sizeof(detail));
+        lssd_log_device(priority, e->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s%s",
+                        e->ifname, ident, outcome_name(o), o->old_node_id, o->new_node_id,
+                        !detail[0] ? "" : o->not_stored ? ", " : ": ", detail);
+}
+
+int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
+        size_t n = 0, count[LSS_OUTCOME_FAILED + 1] = { 0 };
+        const lss_outcome *out;
+        sd_bus *bus = e->dbus;
+        uint64_t now_realtime = lssd_realtime_us();
+
+        if (!r) {
+                e->pass_started_us = now_realtime;
+                j->plan.unstored = e->unstored;
+                lssd_taken_check(e, false);
+                lssd_run_expect_finds(e);
+                int k = lss_master_autoassign(e->engine, &j->plan, lssd_job_env_now(e));
+                return k < 0 ? lssd_job_start_failed(e, j, k) : 1;
+        }
+        if (r->status == LSS_OK)
+                memset(e->unstored, 0, sizeof(e->unstored));
+
+        const lss_master_stats *st = lss_master_get_stats(e->engine);
+        if (st->patient_wait_us)
+                log_notice("%s: AutoAssign: mapped devices were not found at first: looked for them again with "
+                           "waits of %u ms (the configured LSS timeout is %u ms)", e->ifname,
+                           st->patient_wait_us / 1000, e->config->lss_timeout_ms);
+        out = lss_master_outcomes(e->engine, &n);
+        for (size_t i = 0; i < n; i++) {
+                /* what a dry run would change did not change: the device is
+                 * where it was found */
+                lss_outcome seen = out[i];
+                if (seen.dry) {
+                        seen.kind = LSS_OUTCOME_UNCHANGED;
+                        seen.new_node_id = seen.old_node_id;
+                        seen.dry = false;
+                }
+                autoassign_publish_one(e, j, &seen, now_realtime);
+                autoassign_log_one(e, j, &out[i]);
+                if ((unsigned) out[i].kind <= LSS_OUTCOME_FAILED)
+                        count[out[i].kind]++;
+        }
+        lssd_devices_refresh(e->devices);
+
+        if (bus)
+                for (size_t i = 0; i < n; i++) {
+                        const lss_outcome *o = &out[i];
+                        lssd_device *d = lssd_devices_find(e->devices, &o->id);
+                        if (outcome_changed(o) && d)
+                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
+                                                          d->path, o->old_node_id, o->new_node_id);
+                        else if (o->kind == LSS_OUTCOME_UNKNOWN)
+                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu",
+                                                          o->id.vendor, o->id.product, o->id.revision, o->id.serial);
+                }
+
+        /* a dry run is not the bus's last pass */
+        lssd_pass_record dry_rec, *rec = j->plan.dry_run ? &dry_rec : &e->last_pass;
+        *rec = (lssd_pass_record) { .started_us = e->pass_started_us, .boot = e->boot_pending,
+                                    .duration_us = now_realtime > e->pass_started_us ?
+                                                           now_realtime - e->pass_started_us : 0 };
+        for (size_t i = 0; i <= LSS_OUTCOME_FAILED; i++)
+                rec->counts[i] = (uint32_t) count[i];
+        /* the bus matches the map only when every mapped device has its node-ID */
+        const char *verdict = r->status != LSS_OK ? lssd_status_to_result(r->status)
+                              : count[LSS_OUTCOME_MISSING] + count[LSS_OUTCOME_CONFLICT] + count[LSS_OUTCOME_FAILED] > 0
+                                      ? "partial"
+                                      : "done";
+        snprintf(rec->result, sizeof(rec->result), "%s", verdict);
+        if (!j->plan.dry_run)
+                e->ops->last_pass_changed(e->userdata);
+
+        snprintf(j->summary, sizeof(j->summary),
+                 "%s: %zu %sassigned, %zu from the pool, %zu unchanged, %zu unknown, %zu missing, %zu conflicts, "
+                 "%zu failed", e->ifname, count[LSS_OUTCOME_ASSIGNED], j->plan.dry_run ? "would be " : "",
+                 count[LSS_OUTCOME_POOL],
+                 count[LSS_OUTCOME_UNCHANGED], count[LSS_OUTCOME_UNKNOWN], count[LSS_OUTCOME_MISSING],
+                 count[LSS_OUTCOME_CONFLICT], count[LSS_OUTCOME_FAILED]);
+
+        if (r->status != LSS_OK) {
+                /* the pass as a whole broke off (bus down, cancelled): what it did is published above */
+                sd_bus_error err = SD_BUS_ERROR_NULL;
+                lssd_error_from_result(&err, r, LSS_SERVICE_NONE, "AutoAssign: ");
+                log_warning("%s: %s (%s)", e->ifname, err.message, j->summary);
+                lssd_job_reply_error(j, &err);
+                sd_bus_error_free(&err);
+                j->result = lssd_status_to_result(r->status);
+                return 0;
+        }
+
+        log_notice("AutoAssign%s on %s", j->plan.dry_run ? " (dry run: nothing was sent but discovery)" : "",
+                   j->summary);
+        j->result = verdict;
+
+        if (!j->request)
+                return 0;
+        sd_bus_message *reply = NULL;
+        int k = sd_bus_message_new_method_return(j->request, &reply);
+        if (k >= 0)
+                k = sd_bus_message_open_container(reply, 'a', "(uuuuyyss)");
+        for (size_t i = 0; k >= 0 && i < n; i++) {
+                const lss_outcome *o = &out[i];
+                char detail[200];
+                outcome_detail(o, detail, sizeof(detail));
+                k = sd_bus_message_append(reply, "(uuuuyyss)", o->id.vendor, o->id.product, o->id.revision,
+                                          o->id.serial, o->old_node_id, o->new_node_id, outcome_name(o), detail);
+        }
+        if (k >= 0)
+                k = sd_bus_message_close_container(reply);
+        if (k >= 0)
+                k = sd_bus_message_append(reply, "s", j->result);
+        if (k >= 0)
+                lssd_job_reply_message(j, reply);
+        else
+                log_error("%s: failed to build the reply of AutoAssign: %s", e->ifname, strerror(-k));
+        sd_bus_message_unref(reply);
+        return 0;
+}

@@ -1,0 +1,226 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "daemon/lssd_errors.h"
+#include "daemon/lssd_job_reply.h"
+#include "daemon/lssd_run.h"
+#include "daemon/lssd_log.h"
+
+/* ---- Scan: fastscan enumeration, then slowscan per vendor/product pair ---- */
+
+/* What an enumeration will likely find: the non-configured devices seen
+ * before (the first scan of a bus cannot know: its progress assumes as many
+ * again as found so far). */
+void lssd_run_expect_finds(lssd_job_env *e) {
+        unsigned n = 0;
+        for (const lssd_device *d = e->devices->head; d; d = d->next)
+                n += !d->missing && d->node_id == LSS_NODE_ID_UNCONFIGURED;
+        lss_master_set_expected_finds(e->engine, n);
+}
+
+int lssd_scan_stage_start(lssd_job_env *e, const lssd_job *j) {
+        uint64_t now = lssd_job_env_now(e);
+        if (j->stage == 0) {
+                lssd_run_expect_finds(e);
+                return lss_master_enumerate(e->engine, NULL, now);
+        }
+        const lssd_vendor_product *p = &j->pairs[j->stage - 1];
+        lss_identify_range range = {
+                .vendor = p->vendor, .product = p->product,
+                .rev_lo = 0, .rev_hi = UINT32_MAX,
+                .serial_lo = 0, .serial_hi = UINT32_MAX,
+        };
+        return lss_master_slowscan(e->engine, &range, now);
+}
+
+static int scan_start_stage(lssd_job_env *e, lssd_job *j) {
+        int k = lssd_scan_stage_start(e, j);
+        return k < 0 ? lssd_job_start_failed(e, j, k) : 1;
+}
+
+static int compare_devices(const void *a, const void *b) {
+        const lss_device *x = a, *y = b;
+        return lss_identity_compare(&x->id, &y->id);
+}
+
+static bool scan_covers(const lssd_job *j, const lssd_device *d) {
+        /* every non-configured slave answers the fastscan */
+        if (d->node_id == LSS_NODE_ID_UNCONFIGURED)
+                return true;
+        for (size_t i = 0; i < j->n_pairs; i++)
+                if (j->pairs[i].vendor == d->id.vendor && j->pairs[i].product == d->id.product)
+                        return true;
+        return false;
+}
+
+/* The device object of a device the scan found, brought up to date
+ * (created when new); NULL when it could not be recorded. */
+static lssd_device *scan_record(lssd_job_env *e, const lss_device *f, uint64_t now_realtime) {
+        lssd_device *d = NULL;
+        char ident[40];
+        int k = lssd_devices_get(e->devices, &f->id, true, f->node_id, lssd_realtime_us(), &d);
+        if (k < 0) {
+                log_error("%s: failed to record device %s: %s", e->ifname,
+                          lssd_identity_format(&f->id, ident, sizeof(ident)), strerror(-k));
+                return NULL;
+        }
+        lssd_heard_owner(e->heard, f->node_id, &f->id);
+        if (d->node_id != f->node_id) {
+                d->node_id = f->node_id;
+                d->assigned = false;
+                d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
+        }
+        d->missing = false;
+        d->last_seen = now_realtime;
+        d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
+        return d;
+}
+
+static bool scan_announced(const lssd_job *j, const lss_identity *id) {
+        for (size_t i = 0; i < j->n_announced; i++)
+                if (lss_identity_equal(&j->announced[i], id))
+                        return true;
+        return false;
+}
+
+/* DeviceFound, and UnknownDevice when the map does not know it: once per
+ * device and job. */
+static void scan_announce(lssd_job_env *e, lssd_job *j, const lss_device *f, const lssd_device *d) {
+        sd_bus *bus = e->dbus;
+        lss_identity *a = realloc(j->announced, (j->n_announced + 1) * sizeof(*a));
+        if (a) {
+                j->announced = a;
+                j->announced[j->n_announced++] = f->id;
+        }
+        if (!bus)
+                return;
+        if (d)
+                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "DeviceFound", "o", d->path);
+        if (!lssd_config_lookup_device(e->config, &f->id))
+                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu", f->id.vendor,
+                                          f->id.product, f->id.revision, f->id.serial);
+}
+
+void lssd_scan_found(lssd_job_env *e, lssd_job *j, const lss_device *f) {
+        if (scan_announced(j, &f->id))
+                return; /* by an earlier stage: the end brings its node-ID up to date */
+        lssd_device *d = scan_record(e, f, lssd_realtime_us());
+        if (!d)
+                return; /* tried again at the end */
+        lssd_devices_refresh(e->devices);
+        scan_announce(e, j, f, d);
+}
+
+static void scan_publish(lssd_job_env *e, lssd_job *j, uint64_t now_realtime) {
+        /* who was not found although the scan would have */
+        if (!j->scan_incomplete)
+                for (lssd_device *d = e->devices->head; d; d = d->next) {
+                        bool found = false;
+                        for (size_t i = 0; i < j->n_found && !found; i++)
+                                found = lss_identity_equal(&j->found[i].id, &d->id);
+                        if (!found && !d->missing && scan_covers(j, d))
+                                d->missing = true;
+                }
+
+        /* Devices announced when they were found are up to date, unless a
+         * later stage read another node-ID; the others are recorded now. */
+        for (size_t i = 0; i < j->n_found; i++) {
+                const lss_device *f = &j->found[i];
+                const lssd_device *d = lssd_devices_find(e->devices, &f->id);
+                if (!scan_announced(j, &f->id) || !d || d->node_id != f->node_id)
+                        (void) scan_record(e, f, now_realtime);
+        }
+        lssd_devices_refresh(e->devices);
+
+        for (size_t i = 0; i < j->n_found; i++) {
+                const lss_device *f = &j->found[i];
+                if (!scan_announced(j, &f->id))
+                        scan_announce(e, j, f, lssd_devices_find(e->devices, &f->id));
+        }
+}
+
+static void scan_log(lssd_job_env *e, lssd_job *j) {
+        char line[900];
+        size_t n = 0;
+        n += (size_t) snprintf(line, sizeof(line), "%s: Scan: %zu device%s", e->ifname, j->n_found,
+                               j->n_found == 1 ? "" : "s");
+        for (size_t i = 0; i < j->n_found && n < sizeof(line); i++) {
+                char ident[40];
+                lssd_identity_format(&j->found[i].id, ident, sizeof(ident));
+                if (j->found[i].node_id == LSS_NODE_ID_UNCONFIGURED)
+                        n += (size_t) snprintf(line + n, sizeof(line) - n, "%s %s non-configured", i ? "," : ":",
+                                               ident);
+                else
+                        n += (size_t) snprintf(line + n, sizeof(line) - n, "%s %s node %u", i ? "," : ":", ident,
+                                               j->found[i].node_id);
+        }
+        log_info("%s", line);
+        for (size_t i = 0; i < j->n_found; i++) {
+                char ident[40];
+                const lss_device *d = &j->found[i];
+                lssd_identity_format(&d->id, ident, sizeof(ident));
+                lssd_log_device(LOG_DEBUG, e->ifname, &d->id, d->node_id, "%s: found %s node %u", e->ifname, ident,
+                                d->node_id);
+                if (d->aside_node_id)
+                        lssd_log_device(LOG_INFO, e->ifname, &d->id, d->node_id,
+                                        "%s: Scan set %s aside with the volatile node-ID %u while it went on, then "
+                                        "gave it 255 back (NMT Reset Communication of node %u); node-ID now %u",
+                                        e->ifname, ident, d->aside_node_id, d->aside_node_id, d->node_id);
+        }
+}
+
+int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
+        if (!r) {
+                j->n_stages = (unsigned) j->n_pairs + 1;
+                return scan_start_stage(e, j);
+        }
+
+        for (size_t i = 0; i < r->n_devices; i++)
+                if (lssd_job_add_found(j, &r->devices[i]) < 0) {
+                        j->scan_incomplete = true;
+                        break;
+                }
+
+        if (r->status != LSS_OK) {
+                sd_bus_error err = SD_BUS_ERROR_NULL;
+                j->scan_incomplete = true;
+                scan_publish(e, j, lssd_realtime_us());
+                lssd_error_from_result(&err, r, LSS_SERVICE_NONE, "Scan: ");
+                log_warning("%s: %s", e->ifname, err.message);
+                lssd_job_reply_error(j, &err);
+                sd_bus_error_free(&err);
+                j->result = lssd_status_to_result(r->status);
+                return 0;
+        }
+
+        if (++j->stage <= j->n_pairs)
+                return scan_start_stage(e, j);
+
+        if (j->n_found > 1) /* found is NULL when nothing was found, and qsort's pointer is nonnull */
+                qsort(j->found, j->n_found, sizeof(*j->found), compare_devices);
+        scan_publish(e, j, lssd_realtime_us());
+        scan_log(e, j);
+        j->result = "done";
+
+        if (!j->request)
+                return 0;
+        sd_bus_message *reply = NULL;
+        int k = sd_bus_message_new_method_return(j->request, &reply);
+        if (k >= 0)
+                k = sd_bus_message_open_container(reply, 'a', "(uuuuy)");
+        for (size_t i = 0; k >= 0 && i < j->n_found; i++) {
+                const lss_device *f = &j->found[i];
+                k = sd_bus_message_append(reply, "(uuuuy)", f->id.vendor, f->id.product, f->id.revision, f->id.serial,
+                                          f->node_id);
+        }
+        if (k >= 0)
+                k = sd_bus_message_close_container(reply);
+        if (k >= 0)
+                lssd_job_reply_message(j, reply);
+        else
+                log_error("%s: failed to build the reply of Scan: %s", e->ifname, strerror(-k));
+        sd_bus_message_unref(reply);
+        return 0;
+}
