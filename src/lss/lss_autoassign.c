@@ -30,6 +30,9 @@ typedef struct lss_aa_state {
         int entry;              /* map entry of the device being handled, -1 none */
         bool changed;
         uint8_t target;
+        enum lss_service *failed_at; /* per map entry: the service its first look failed at */
+        bool unstored[128];     /* the caller's unstored node-IDs, and those the second look
+                                 * must store again (a first look that failed at Store) */
         bool taken[128];        /* answered the SDO probe at the start (before an NMT Stop) */
         bool free[128];         /* silent to it, and nobody assigned there since */
         lss_probe_state probe;
@@ -57,6 +60,7 @@ void lss_autoassign_free_state(lss_master *m) {
                 return;
         free(m->aa->handled);
         free(m->aa->first);
+        free(m->aa->failed_at);
         free(m->aa->todo);
         free(m->aa->out);
         free(m->aa);
@@ -133,6 +137,9 @@ static uint8_t pool_next(const lss_aa_state *s) {
 /* Turn the result of an assignment into the device's outcome. */
 static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool pool) {
         const lss_result *r = &m->result;
+        int e = lookup(s->plan, id);
+        if (e >= 0 && r->status != LSS_OK && !s->patient)
+                s->failed_at[e] = r->failed_service;
         lss_outcome *o = outcome_add(s, id);
         if (!o)
                 return;
@@ -157,6 +164,12 @@ static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool 
         }
         if (lss_node_id_valid(r->node_id))
                 s->used[r->node_id] = true;
+        if (s->patient && r->status == LSS_OK && e >= 0 && s->first[e].kind != LSS_OUTCOME_MISSING &&
+            s->first[e].old_node_id != 0 && s->first[e].old_node_id != s->target) {
+                /* the first look changed it before it fell silent: this pass assigned it */
+                o->kind = pool ? LSS_OUTCOME_POOL : LSS_OUTCOME_ASSIGNED;
+                o->old_node_id = s->first[e].old_node_id;
+        }
         if (s->patient && r->status != LSS_E_NOT_FOUND && !o->message[0])
                 snprintf(o->message, sizeof(o->message), "found on a second look, with waits of %u ms",
                          m->timing.cfg.timeout_us / 1000);
@@ -241,7 +254,7 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                         m->as.flags = assign_flags(s);
                         m->as.taken = s->taken;
                         m->as.free = s->free;
-                        m->as.unstored = s->plan->unstored;
+                        m->as.unstored = s->unstored;
                         PT_CALL(&s->i_pc, proc_assign(m, &m->as));
                         /* a pool ID somebody already answers to: take the next one */
                         if (s->entry < 0 && m->result.in_use) {
@@ -282,7 +295,7 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                 m->as.flags = assign_flags(s);
                 m->as.taken = s->taken;
                 m->as.free = s->free;
-                m->as.unstored = s->plan->unstored;
+                m->as.unstored = s->unstored;
                 PT_CALL(&s->d_pc, proc_assign(m, &m->as));
                 if (m->result.status != LSS_E_NOT_FOUND) {
                         s->handled[s->i] = true;
@@ -331,6 +344,11 @@ static size_t second_look_entries(lss_aa_state *s) {
                                 s->first[i] = *o;
                                 o->kind = LSS_OUTCOME_MISSING; /* looked for again */
                                 s->handled[i] = false;
+                                /* silent after Configure Node-ID or at Store: it may
+                                 * have the node-ID and not have stored it */
+                                if (s->failed_at[i] == LSS_SERVICE_CONFIGURE_NODE_ID ||
+                                    s->failed_at[i] == LSS_SERVICE_STORE)
+                                        s->unstored[s->plan->map[i].node_id] = true;
                                 k++;
                         } else if (o->kind == LSS_OUTCOME_MISSING && o->status == LSS_E_NOT_FOUND) {
                                 /* the second look says what became of it */
@@ -492,10 +510,13 @@ int lss_master_autoassign(lss_master *m, const lss_autoassign_plan *plan, uint64
         if (!m->aa)
                 return -ENOMEM;
         m->aa->plan = plan;
+        if (plan->unstored)
+                memcpy(m->aa->unstored, plan->unstored, sizeof(m->aa->unstored));
         m->stats.patient_wait_us = 0;
         m->aa->handled = calloc(plan->n_map + 1, sizeof(bool));
         m->aa->first = calloc(plan->n_map + 1, sizeof(lss_outcome));
-        if (!m->aa->handled || !m->aa->first) {
+        m->aa->failed_at = calloc(plan->n_map + 1, sizeof(*m->aa->failed_at));
+        if (!m->aa->handled || !m->aa->first || !m->aa->failed_at) {
                 lss_autoassign_free_state(m);
                 return -ENOMEM;
         }

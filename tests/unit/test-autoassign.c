@@ -341,6 +341,54 @@ START_TEST(found_then_silent_is_looked_for_again) {
 }
 END_TEST
 
+/* A device silent to its Store (the answer, and here the store itself,
+ * lost): the second look finds it at its new node-ID. It is "assigned"
+ * from the node-ID it had (not "unchanged": the bench saw that reply), and
+ * Store is sent again, or the node-ID would be gone at its next power-on. */
+static void store_lost_once(void *ud, const lss_frame *f, uint64_t t) {
+        deafen *d = ud;
+        (void) t;
+        if (!d->done && lss_is_request(f) && f->data[0] == LSS_CS_STORE && d->slave->st.configuration) {
+                d->slave->faults.ignore_cs = LSS_CS_STORE;
+                d->done = true;
+        }
+}
+
+START_TEST(store_lost_is_stored_on_second_look) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(1000, 300);
+        lss_map_entry map[2];
+        for (unsigned i = 0; i < 2; i++) {
+                lss_identity id = { 0xEC, 0x3A, 0x10, 0xB10000 + i };
+                membus_add_slave(b, &id, 0xFF, &f);
+                map[i] = (lss_map_entry) { .id = id, .revision_known = true, .node_id = (uint8_t) (20 + i) };
+        }
+        lss_slave *deaf = membus_slave(b, 0);
+        deafen d = { deaf, false };
+        membus_set_trace(b, store_lost_once, &d);
+        lss_autoassign_plan p = { .map = map, .n_map = 2, .store = true };
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_autoassign(m, &p, membus_now(b)), 0);
+        const lss_result *r = lss_drive(m, b, 600 * SECOND, deaf_until_patient, &d);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert(d.done);
+        for (unsigned i = 0; i < 2; i++) {
+                const lss_outcome *o = outcome_of(m, &map[i].id);
+                ck_assert_msg(o && o->kind == LSS_OUTCOME_ASSIGNED, "device %u: %s %u -> %u %s", i,
+                              o ? lss_outcome_name(o->kind) : "-", o ? o->old_node_id : 0, o ? o->new_node_id : 0,
+                              o ? o->message : "");
+                ck_assert_uint_eq(o->old_node_id, 0xFF);
+                ck_assert_uint_eq(o->new_node_id, 20 + i);
+                ck_assert_uint_eq(membus_slave(b, i)->st.active_node_id, 20 + i);
+                ck_assert_uint_eq(membus_slave(b, i)->st.stored_node_id, 20 + i);
+        }
+        ck_assert_msg(strstr(outcome_of(m, &deaf->id)->message, "second look"), "%s",
+                      outcome_of(m, &deaf->id)->message);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* A dry run sends discovery only (no Configure, Store or NMT frame) and
  * says what a pass would do; the pass after it does exactly that. */
 typedef struct dry_count {
@@ -543,6 +591,7 @@ int main(void) {
         tcase_add_test(tc, slow_devices_are_all_found);
         tcase_add_test(tc, probes_together);
         tcase_add_test(tc, found_then_silent_is_looked_for_again);
+        tcase_add_test(tc, store_lost_is_stored_on_second_look);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
