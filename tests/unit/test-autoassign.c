@@ -285,18 +285,19 @@ END_TEST
  * late under load) is looked for again on the second look, not reported
  * missing: autoassign-encoder-mixed under a CPU hog in the VM reported one
  * missing with "no slave ... answered the selective switch". */
+/* From the first request `when` it hears in configuration on, the slave
+ * ignores requests with cs `deaf` (until deaf_until_patient restores it). */
 typedef struct deafen {
         lss_slave *slave;
+        uint8_t when, deaf;
         bool done;
 } deafen;
 
-/* once the scan verified it (Inquire Node-ID while it is in configuration):
- * deaf to the selective switch */
-static void deaf_after_verified(void *ud, const lss_frame *f, uint64_t t) {
+static void deaf_from(void *ud, const lss_frame *f, uint64_t t) {
         deafen *d = ud;
         (void) t;
-        if (!d->done && lss_is_request(f) && f->data[0] == LSS_CS_INQUIRE_NODE_ID && d->slave->st.configuration) {
-                d->slave->faults.ignore_cs = 0x43; /* the last frame of the selective switch */
+        if (!d->done && lss_is_request(f) && f->data[0] == d->when && d->slave->st.configuration) {
+                d->slave->faults.ignore_cs = d->deaf;
                 d->done = true;
         }
 }
@@ -317,8 +318,9 @@ START_TEST(found_then_silent_is_looked_for_again) {
                 map[i] = (lss_map_entry) { .id = id, .revision_known = false, .node_id = (uint8_t) (10 + i) };
         }
         lss_slave *deaf = membus_slave(b, 0);
-        deafen d = { deaf, false };
-        membus_set_trace(b, deaf_after_verified, &d);
+        /* once the scan verified it (Inquire Node-ID): deaf to the selective switch's last frame */
+        deafen d = { deaf, LSS_CS_INQUIRE_NODE_ID, 0x43, false };
+        membus_set_trace(b, deaf_from, &d);
         lss_autoassign_plan p = { .map = map, .n_map = 3, .store = true };
         lss_master *m = master_default();
         ck_assert_int_eq(lss_master_autoassign(m, &p, membus_now(b)), 0);
@@ -345,15 +347,6 @@ END_TEST
  * lost): the second look finds it at its new node-ID. It is "assigned"
  * from the node-ID it had (not "unchanged": the bench saw that reply), and
  * Store is sent again, or the node-ID would be gone at its next power-on. */
-static void store_lost_once(void *ud, const lss_frame *f, uint64_t t) {
-        deafen *d = ud;
-        (void) t;
-        if (!d->done && lss_is_request(f) && f->data[0] == LSS_CS_STORE && d->slave->st.configuration) {
-                d->slave->faults.ignore_cs = LSS_CS_STORE;
-                d->done = true;
-        }
-}
-
 START_TEST(store_lost_is_stored_on_second_look) {
         membus *b = membus_new(125000);
         lss_slave_faults f = faults_latency(1000, 300);
@@ -364,8 +357,8 @@ START_TEST(store_lost_is_stored_on_second_look) {
                 map[i] = (lss_map_entry) { .id = id, .revision_known = true, .node_id = (uint8_t) (20 + i) };
         }
         lss_slave *deaf = membus_slave(b, 0);
-        deafen d = { deaf, false };
-        membus_set_trace(b, store_lost_once, &d);
+        deafen d = { deaf, LSS_CS_STORE, LSS_CS_STORE, false };
+        membus_set_trace(b, deaf_from, &d);
         lss_autoassign_plan p = { .map = map, .n_map = 2, .store = true };
         lss_master *m = master_default();
         ck_assert_int_eq(lss_master_autoassign(m, &p, membus_now(b)), 0);
