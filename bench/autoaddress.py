@@ -38,16 +38,16 @@ MODES = {
 PROFILE_SUFFIX = '-canopennode'  # the same pass on slaves that answer Fastscan in configuration state
 
 
-def lssd_config(mode, slaves):
-    """libconfig text for one mode; returns (text, {identity: node} or None for the pool)."""
-    head = 'buses = ( { interface = "%s"; bitrate = %d; store = true;\n' % (IFNAME, bl.BITRATE)
+def bus_block(mode, slaves, ifname=IFNAME):
+    """One bus's libconfig group for one mode; returns (text, {identity: node} or None for the pool)."""
+    head = '{ interface = "%s"; bitrate = %d; store = true;\n' % (ifname, bl.BITRATE)
     if mode == 'mapped':
         devs = ',\n'.join('{ vendor = 0x%x; product = 0x%x; revision = 0x%x; serial = 0x%x; node_id = %d; }'
                           % (s + (i + 1,)) for i, s in enumerate(slaves))
-        return head + 'devices = (\n%s\n); } );\n' % devs, {s: i + 1 for i, s in enumerate(slaves)}
+        return head + 'devices = (\n%s\n); }' % devs, {s: i + 1 for i, s in enumerate(slaves)}
     if mode == 'serial':
         devs = ',\n'.join('{ serial = 0x%x; node_id = %d; }' % (s[3], i + 1) for i, s in enumerate(slaves))
-        return (head + 'vendor = 0x%x; product = 0x%x;\ndevices = (\n%s\n); } );\n' % (bl.VENDOR, bl.PRODUCT, devs),
+        return (head + 'vendor = 0x%x; product = 0x%x;\ndevices = (\n%s\n); }' % (bl.VENDOR, bl.PRODUCT, devs),
                 {s: i + 1 for i, s in enumerate(slaves)})
     pool = 'unknown = "pool"; pool = [ %d, %d ];\n' % POOL
     if mode == 'vendor':
@@ -55,8 +55,49 @@ def lssd_config(mode, slaves):
         taken = {s[3] for s in slaves}
         absent = next(x for x in range(0xA0000000, 0xA0001000) if x not in taken)
         return (head + pool + 'devices = ( { vendor = 0x%x; product = 0x%x; revision = 0; serial = 0x%x; '
-                'node_id = 127; } ); } );\n' % (bl.VENDOR, bl.PRODUCT, absent), None)
-    return head + pool + '} );\n', None
+                'node_id = 127; } ); }' % (bl.VENDOR, bl.PRODUCT, absent), None)
+    return head + pool + '}', None
+
+
+def lssd_config(mode, slaves):
+    """libconfig text for one mode on vcan0; returns (text, {identity: node} or None for the pool)."""
+    block, expected = bus_block(mode, slaves)
+    return 'buses = ( %s );\n' % block, expected
+
+
+def check_reply(reply, slaves, expected, who):
+    """The AutoAssign reply must give every slave its node-ID (from the map,
+    or distinct ones from the pool); returns {identity: node-ID}."""
+    # the reply lists every device the pass dealt with (the vendor mode's absent one too)
+    got = {tuple(r[:4]): r[5] for r in reply if r[6] in ('assigned', 'pool')}
+    if expected is None:
+        ids = sorted(got.values())
+        if len(set(ids)) != len(ids) or any(not POOL[0] <= x <= POOL[1] for x in ids):
+            raise bl.BenchFailure('%s: bad pool node-IDs %r' % (who, ids))
+        expected = {s: got.get(s, 0) for s in slaves}
+    if set(got) != set(slaves) or any(got[s] != expected[s] for s in slaves):
+        raise bl.BenchFailure('%s: reply %r does not give every slave its node-ID' % (who, sorted(reply)))
+    return expected
+
+
+def check_reply_and_states(reply, slaves, expected, state_dir, who):
+    """check_reply, then the state files; a wrong reply names what the
+    state files hold too (a wrong account of a right assignment, or not)."""
+    try:
+        expected = check_reply(reply, slaves, expected, who)
+    except bl.BenchFailure as e:
+        if expected is not None:
+            try:
+                bl.check_states(state_dir, expected, who)
+                held = 'every slave has its node-ID (active, stored, waiting)'
+            except bl.BenchFailure as e2:
+                held = str(e2)
+        else:
+            held = ', '.join('%08x: %s' % (x[3], '/'.join(bl.read_state(state_dir, x[3]).get(k, '?') for k in (
+                'active_node_id', 'stored_node_id', 'lss_state'))) for x in slaves)
+        raise bl.BenchFailure('%s; state files: %s' % (e, held))
+    bl.check_states(state_dir, expected, who)
+    return expected
 
 
 def run_lssd(mode, n, rep, simulate=False):
@@ -98,16 +139,8 @@ def run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who):
     elapsed = time.monotonic() - t0
     w1 = time.time()
     cpu = bl.proc_cpu_s(env.lssd.pid) - cpu0
-    # the reply lists every device the pass dealt with (the vendor mode's absent one too)
-    got = {tuple(r[:4]): r[5] for r in reply if r[6] in ('assigned', 'pool')}
-    if expected is None:
-        ids = sorted(got.values())
-        if len(set(ids)) != len(ids) or any(not POOL[0] <= x <= POOL[1] for x in ids):
-            raise bl.BenchFailure('%s: bad pool node-IDs %r' % (who, ids))
-        expected = {s: got.get(s, 0) for s in slaves}
-    if set(got) != set(slaves) or any(got[s] != expected[s] for s in slaves):
-        raise bl.BenchFailure('%s: reply %r does not give every slave its node-ID' % (who, sorted(reply)))
     if simulate:
+        expected = check_reply(reply, slaves, expected, who)
         # the slaves live inside lssd: ask each one its node-ID (selective switch + inquire)
         now = {}
         for ident in slaves:
@@ -120,7 +153,7 @@ def run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who):
     else:
         time.sleep(0.3)  # let candump write the last frames
         stats = bl.frame_stats(bl.read_candump(env.candump_path, IFNAME, w0 - 0.05, w1 + 0.05))
-        bl.check_states(env.state_dirs[IFNAME], expected, who)
+        check_reply_and_states(reply, slaves, expected, env.state_dirs[IFNAME], who)
     c.close()
     env.conns.remove(c)
     # the engine's own account of the pass (steps, retries, timeouts, waits): the profile

@@ -17,6 +17,7 @@ LABEL = {'mapped': 'lssd, map (full identities)', 'vendor': 'lssd, vendor/produc
          'vendor-canopennode': 'lssd, vendor known, CANopenNode', 'blind-canopennode': 'lssd, blind, CANopenNode',
          'canopen': 'python-canopen fast_scan loop'}
 SPEEDUP_NAME = {'mapped': 'mapped', 'vendor': 'known-vendor', 'blind': 'blind'}
+PARALLEL_MAX = 1.2  # "about as long as the slowest bus alone"
 
 
 def machine():
@@ -115,11 +116,49 @@ def main():
             t = [r['elapsed_s'] for r in runs]
             print('# python-canopen N=%d: its own fixed waits (0.5 s timeouts, 10 ms pauses) %.1f s median = %.0f%% '
                   'of its time' % (n, bl.summary(w)['median'], 100 * sum(w) / sum(t)))
-    if allcases:
+    if medians:
         print('# time: wall time of the whole procedure (one AutoAssign call; python-canopen: its loop until '
               'fast_scan finds nothing);')
         print('# frames: every frame on vcan0 meanwhile (candump); floor: their bus time at 125 kbit/s with exact '
               'bit stuffing; x floor = time / floor')
+
+    # ---- buses in parallel ----
+    par = {(v['mode'], v['n']): v for k, v in res.items() if k.startswith('parallel-')}
+    par_ratio = {}
+    if par:
+        nb = max(len(v.get('buses', [])) for v in par.values())
+        print()
+        print('## Buses in parallel: AutoAssign on %d vcan buses at once vs each bus alone (VM; one lssd with the %d '
+              'buses, one lss-sim per bus, N slaves per bus)' % (nb, nb))
+        print('%-31s %5s %4s %-26s %-26s %7s %-27s %-27s %s' % (
+            'case', 'N/bus', 'reps', 'slowest alone s: median', 'all at once s: median', 'ratio',
+            'alone per bus s (rep 0)', 'at once per bus s (rep 0)', 'results'))
+        for mode in ORDER:
+            for n in sorted({k[1] for k in par}):
+                c = par.get((mode, n))
+                if not c:
+                    continue
+                runs = ok_runs(c)
+                bad = len(c['runs']) - len(runs)
+                for r in c['runs']:
+                    if 'failed' in r:
+                        failures.append('parallel %s N=%d rep %d: %s' % (mode, n, r['rep'], r['failed']))
+                right = '%d of %d right' % (len(runs), len(c['runs'])) + (' !!!! %d WRONG' % bad if bad else '')
+                if not runs:
+                    print('%-31s %5d %4d FAILED %s' % (LABEL[mode], n, len(c['runs']), right))
+                    continue
+                ratio = bl.summary([r['ratio'] for r in runs])
+                par_ratio[(mode, n)] = ratio['median']
+                r0 = runs[0]
+                print('%-31s %5d %4d %-26s %-26s %6.2fx %-27s %-27s %s' % (
+                    LABEL[mode], n, len(runs), fmt_spread(med(runs, 'slowest_alone_s')),
+                    fmt_spread(med(runs, 'parallel_s')), ratio['median'],
+                    '/'.join('%.2f' % t for t in r0['alone']['bus_s']),
+                    '/'.join('%.2f' % t for t in r0['parallel']['bus_s']), right))
+        print('# alone: AutoAssign on one bus after the other (fresh slaves), each call timed; at once: one call per '
+              'bus, sent together, timed to the last reply;')
+        print('# ratio = at once / slowest alone (target: about 1x); results: every slave of every bus at its node-ID '
+              '(reply and state files)')
 
     # ---- targets ----
     print()
@@ -149,7 +188,11 @@ def main():
         if fp and 'scan' in fp and 'failed' not in fp['scan']:
             targets.append(('blind Scan of %d slaves (vm) <= 70 s' % fp['slaves'], fp['scan']['elapsed_s'] <= 70,
                             '%.1f s' % fp['scan']['elapsed_s']))
-    n_runs = sum(len(c['runs']) for c in allcases.values())
+    for (mode, n), x in sorted(par_ratio.items(), key=lambda kv: (ORDER.index(kv[0][0]), kv[0][1])):
+        targets.append(('lssd %s, %d buses at once, N=%d/bus: <= %.1fx slowest alone' % (
+            mode, max(len(v.get('buses', [])) for v in par.values()), n, PARALLEL_MAX), x <= PARALLEL_MAX,
+            '%.2fx' % x))
+    n_runs = sum(len(c['runs']) for c in allcases.values()) + 2 * sum(len(c['runs']) for c in par.values())
     try:
         with open(os.path.join(bl.results_dir(), 'failures.log')) as f:
             history = [line.rstrip() for line in f if line.strip()]
