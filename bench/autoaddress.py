@@ -3,19 +3,23 @@
 """Auto-addressing on vcan: lssd AutoAssign vs python-canopen's fastscan loop.
 
     autoaddress.py --impl lssd|canopen [--n 1,8,32] [--reps 5] [--modes mapped,vendor,serial,blind,...]
+    autoaddress.py --impl lssd --hog [--n 8,32] [--reps 3] [--modes mapped,vendor,blind]
 
 N non-configured lss-sim slaves (vendor 0x9A, product 3, random revision and
 serial from a fixed seed per N and repetition; latency 1 ms + 0..0.3 ms
 jitter) on vcan0, 125 kbit/s. Per run: wall time of the whole procedure,
 frames on the bus (candump), the bus-time floor of those frames, lssd's CPU
 time; afterwards every slave's state file must hold the expected node-ID
-(active and stored, LSS waiting), or the bench fails.
+(active and stored, LSS waiting), or the bench fails. --hog: the same lssd
+runs with a spinning `sh -c 'while :; do :; done'` on every CPU (every vCPU
+of the VM) for the whole phase; saved as impl lssd-hog.
 
 Needs root and vcan0: run it through bench/run (which uses tests/vm/run)."""
 
 import argparse
 import os
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
@@ -100,7 +104,18 @@ def check_reply_and_states(reply, slaves, expected, state_dir, who):
     return expected
 
 
-def run_lssd(mode, n, rep, simulate=False):
+def cpu_hogs():
+    """A spinning shell on every CPU (every vCPU in the VM): a loaded host."""
+    return [subprocess.Popen(['sh', '-c', 'while :; do :; done']) for _ in range(os.cpu_count() or 1)]
+
+
+def stop_hogs(hogs):
+    for p in hogs:
+        p.kill()
+        p.wait()
+
+
+def run_lssd(mode, n, rep, simulate=False, hog=False):
     from lssdtest import Env, Slave
 
     slaves = bl.identities(n, bl.seed_of(n, rep))
@@ -114,14 +129,14 @@ def run_lssd(mode, n, rep, simulate=False):
     conf, expected = lssd_config(base, slaves)
     os.environ.setdefault('LSSD_LOG_LEVEL', 'debug')  # one line per job: the engine's counters
     os.environ['LSSD_TEST_BACKEND'] = 'simulate' if simulate else 'vcan'
-    who = 'lssd%s %s N=%d rep %d' % (' --simulate' if simulate else '', mode, n, rep)
+    who = 'lssd%s%s %s N=%d rep %d' % (' --simulate' if simulate else '', ' (CPU hog)' if hog else '', mode, n, rep)
     with Env({IFNAME: [Slave(*s) for s in slaves]}, config=conf, candump=not simulate, sim_args=sim_args) as env:
         try:
             return run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who)
         except bl.BenchFailure:
             # keep what lssd and the candump saw, for the findings
             base = os.path.join(bl.results_dir(), 'failed-%s-%s-n%d-rep%d'
-                                % ('sim' if simulate else 'vcan', mode, n, rep))
+                                % ('sim' if simulate else 'vcan-hog' if hog else 'vcan', mode, n, rep))
             shutil.copy(env.lssd_log_path, base + '.lssd.log')
             if not simulate:
                 shutil.copy(env.candump_path, base + '.candump.log')
@@ -210,15 +225,22 @@ def main():
                     help='lssd-sim: lssd --simulate on the host (in-memory bus, no vcan, no VM)')
     ap.add_argument('--n', default=None, help='comma-separated slave counts (lssd: 1,8,32; canopen: 1,8)')
     ap.add_argument('--reps', type=int, default=None, help='repetitions per case (lssd: 5, canopen: 3)')
+    ap.add_argument('--hog', action='store_true',
+                    help='(--impl lssd) a spinning shell on every CPU, started before the first run and killed '
+                    'after the last; saved as impl lssd-hog (default N 8,32, modes mapped,vendor,blind)')
     ap.add_argument('--modes', default=None,
                     help='lssd modes (default mapped,vendor,blind and, on vcan, the two -canopennode ones): '
                     + ','.join(MODES))
     a = ap.parse_args()
+    if a.hog and a.impl != 'lssd':
+        ap.error('--hog is for --impl lssd')
     lssd = a.impl != 'canopen'
-    ns = [int(x) for x in (a.n or ('1,8,32' if lssd else '1,8')).split(',')]
-    reps = a.reps or (5 if lssd else 3)
+    impl = 'lssd-hog' if a.hog else a.impl
+    ns = [int(x) for x in (a.n or ('8,32' if a.hog else '1,8,32' if lssd else '1,8')).split(',')]
+    reps = a.reps or (3 if a.hog else 5 if lssd else 3)
     if a.modes is None:
-        a.modes = 'mapped,vendor,blind' + (',vendor-canopennode,blind-canopennode' if a.impl == 'lssd' else '')
+        a.modes = 'mapped,vendor,blind' + (',vendor-canopennode,blind-canopennode'
+                                           if a.impl == 'lssd' and not a.hog else '')
     modes = a.modes.split(',') if lssd else ['canopen']
     for m in modes:
         if lssd and m not in MODES:
@@ -228,35 +250,44 @@ def main():
         return 2
 
     failures = []
-    for n in ns:
-        for mode in modes:
-            runs = []
-            for rep in range(reps):
-                try:
-                    r = run_lssd(mode, n, rep, a.impl == 'lssd-sim') if lssd else run_canopen(n, rep)
-                except bl.BenchFailure as e:
-                    failures.append(str(e))
-                    bl.record_failure(str(e))
-                    bl.log('!!!! MIS-ASSIGNMENT / WRONG RESULT: %s' % e)
-                    r = {'failed': str(e)}
-                except Exception as e:  # noqa: BLE001
-                    failures.append('%s %s N=%d rep %d: %r' % (a.impl, mode, n, rep, e))
-                    bl.log(traceback.format_exc())
-                    r = {'failed': repr(e)}
-                r.update(rep=rep, seed=bl.seed_of(n, rep))
-                runs.append(r)
-                bl.log('%-7s %-7s N=%-3d rep %d: %s' % (a.impl, mode, n, rep, ' '.join(
-                    '%s=%s' % (k, ('%.4g' % v) if isinstance(v, float) else v) for k, v in sorted(r.items()))))
-            bl.save('autoaddress-%s-%s-n%d' % (a.impl, mode, n),
-                    {'impl': a.impl, 'mode': mode, 'n': n, 'reps': reps, 'runs': runs,
-                     'description': MODES.get(mode, 'python-canopen fast_scan loop, its defaults'),
-                     'latency_ms': bl.LATENCY_MS, 'jitter_ms': bl.JITTER_MS})
+    hogs = cpu_hogs() if a.hog else []
+    try:
+        run_cases(a, impl, lssd, ns, modes, reps, failures)
+    finally:
+        stop_hogs(hogs)
     if failures:
         bl.log('\n!!!! %d WRONG RESULTS — the bench FAILS:' % len(failures))
         for f in failures:
             bl.log('!!!!   ' + f)
         return 1
     return 0
+
+
+def run_cases(a, impl, lssd, ns, modes, reps, failures):
+    for n in ns:
+        for mode in modes:
+            runs = []
+            for rep in range(reps):
+                try:
+                    r = run_lssd(mode, n, rep, a.impl == 'lssd-sim', a.hog) if lssd else run_canopen(n, rep)
+                except bl.BenchFailure as e:
+                    failures.append(str(e))
+                    bl.record_failure(str(e))
+                    bl.log('!!!! MIS-ASSIGNMENT / WRONG RESULT: %s' % e)
+                    r = {'failed': str(e)}
+                except Exception as e:  # noqa: BLE001
+                    failures.append('%s %s N=%d rep %d: %r' % (impl, mode, n, rep, e))
+                    bl.log(traceback.format_exc())
+                    r = {'failed': repr(e)}
+                r.update(rep=rep, seed=bl.seed_of(n, rep))
+                runs.append(r)
+                bl.log('%-7s %-7s N=%-3d rep %d: %s' % (impl, mode, n, rep, ' '.join(
+                    '%s=%s' % (k, ('%.4g' % v) if isinstance(v, float) else v) for k, v in sorted(r.items()))))
+            bl.save('autoaddress-%s-%s-n%d' % (impl, mode, n),
+                    {'impl': impl, 'mode': mode, 'n': n, 'reps': reps, 'runs': runs,
+                     'hog_processes': os.cpu_count() if a.hog else 0,
+                     'description': MODES.get(mode, 'python-canopen fast_scan loop, its defaults'),
+                     'latency_ms': bl.LATENCY_MS, 'jitter_ms': bl.JITTER_MS})
 
 
 if __name__ == '__main__':

@@ -122,6 +122,43 @@ def main():
         print('# frames: every frame on vcan0 meanwhile (candump); floor: their bus time at 125 kbit/s with exact '
               'bit stuffing; x floor = time / floor')
 
+    # ---- the same cases with a CPU hog on every vCPU, beside the idle figures ----
+    hog = {(m, n): c for (i, m, n), c in allcases.items() if i == 'lssd-hog'}
+    hog_medians = {}
+    if hog:
+        print()
+        print('## Auto-addressing with a CPU hog: a spinning shell on every vCPU of the VM (%s), beside the idle '
+              'figures above (vcan0, same slaves)' % ', '.join(sorted({str(c.get('hog_processes', '?'))
+                                                                     for c in hog.values()})))
+        print('%-31s %3s %4s %9s %-26s %8s %8s %8s %-22s %s' % (
+            'case', 'N', 'reps', 'idle s', 'CPU hog s: median (min-max)', 'idle s/n', 'hog s/n', 'hog/idle',
+            'lssd CPU s (hog)', 'results'))
+        for mode in ORDER:
+            for n in sorted({k[1] for k in hog}):
+                c = hog.get((mode, n))
+                if not c:
+                    continue
+                runs = ok_runs(c)
+                bad = len(c['runs']) - len(runs)
+                for r in c['runs']:
+                    if 'failed' in r:
+                        failures.append('%s %s N=%d rep %d: %s' % (c['impl'], mode, n, r['rep'], r['failed']))
+                right = '%d of %d right' % (len(runs), len(c['runs'])) + (' !!!! %d WRONG' % bad if bad else '')
+                t = med(runs, 'elapsed_s')
+                idle = medians.get(('vm', mode, n))
+                if not t.get('n'):
+                    print('%-31s %3d %4d %9s %-26s %8s %8s %8s %-22s %s' % (
+                        LABEL[mode], n, len(c['runs']), '%.3f' % idle if idle else '-', 'FAILED', '-', '-', '-', '-',
+                        right))
+                    continue
+                hog_medians[(mode, n)] = t['median']
+                print('%-31s %3d %4d %9s %-26s %8s %8.3f %8s %-22s %s' % (
+                    LABEL[mode], n, len(runs), '%.3f' % idle if idle else '-', fmt_spread(t),
+                    '%.3f' % (idle / n) if idle else '-', t['median'] / n,
+                    '%.2fx' % (t['median'] / idle) if idle else '-', fmt_spread(med(runs, 'cpu_s'), digits=2), right))
+        print('# results: runs whose every slave got the expected node-ID (reply and state files, as above); '
+              'slower is fine')
+
     # ---- buses in parallel ----
     par = {(v['mode'], v['n']): v for k, v in res.items() if k.startswith('parallel-')}
     par_ratio = {}
@@ -192,6 +229,11 @@ def main():
         targets.append(('lssd %s, %d buses at once, N=%d/bus: <= %.1fx slowest alone' % (
             mode, max(len(v.get('buses', [])) for v in par.values()), n, PARALLEL_MAX), x <= PARALLEL_MAX,
             '%.2fx' % x))
+    if hog:
+        hog_runs = sum(len(c['runs']) for c in hog.values())
+        hog_bad = sum(1 for c in hog.values() for r in c['runs'] if 'failed' in r)
+        targets.append(('every result right with a CPU hog on every vCPU (%d runs)' % hog_runs, hog_bad == 0,
+                        '%d wrong' % hog_bad))
     n_runs = sum(len(c['runs']) for c in allcases.values()) + 2 * sum(len(c['runs']) for c in par.values())
     try:
         with open(os.path.join(bl.results_dir(), 'failures.log')) as f:
