@@ -6,6 +6,8 @@ line the speedup of lssd over python-canopen at N = 8."""
 
 import os
 import platform
+import re
+import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -17,7 +19,41 @@ LABEL = {'mapped': 'lssd, map (full identities)', 'vendor': 'lssd, vendor/produc
          'vendor-canopennode': 'lssd, vendor known, CANopenNode', 'blind-canopennode': 'lssd, blind, CANopenNode',
          'canopen': 'python-canopen fast_scan loop'}
 SPEEDUP_NAME = {'mapped': 'mapped', 'vendor': 'known-vendor', 'blind': 'blind'}
+# lssd's modes and engine-bench's cases: the same knowledge of the slaves
+ENGINE_CASE = {'mapped': 'c', 'vendor': 'b', 'blind': 'a'}
+ENGINE_ROW = re.compile(r'^\(([a-d])\)\D*?\s+(\d+)\s+(\d+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)x\s*$')
 PARALLEL_MAX = 1.2  # "about as long as the slowest bus alone"
+
+
+def engine_table():
+    """engine-bench's output: run now (LSSD_ENGINE_BENCH or BUILDDIR/bench/engine-bench, ~1 s;
+    saved as engine.txt), else the engine phase's engine.txt. Returns (text, where)."""
+    path = os.environ.get('LSSD_ENGINE_BENCH') or os.path.join(os.path.dirname(bl.results_dir()), 'bench',
+                                                                'engine-bench')
+    if os.access(path, os.X_OK):
+        try:
+            p = subprocess.run([path], capture_output=True, text=True, timeout=300)
+            if p.returncode == 0 and p.stdout.strip():
+                with open(os.path.join(bl.results_dir(), 'engine.txt'), 'w') as f:
+                    f.write(p.stdout)
+                return p.stdout.rstrip(), 'run now'
+        except (OSError, subprocess.SubprocessError):
+            pass
+    try:
+        with open(os.path.join(bl.results_dir(), 'engine.txt')) as f:
+            return f.read().rstrip(), 'engine.txt'
+    except OSError:
+        return '', ''
+
+
+def engine_per_node(text):
+    """{(case letter, N): s/node in virtual time} from engine-bench's first table."""
+    out = {}
+    for line in text.splitlines():
+        m = ENGINE_ROW.match(line)
+        if m:
+            out[(m.group(1), int(m.group(2)))] = float(m.group(7)) / 1000
+    return out
 
 
 def machine():
@@ -291,14 +327,12 @@ def main():
                     mode, 'vcan in the VM' if impl == 'lssd' else 'lssd --simulate, host',
                     fmt_spread(med(ok_runs(c), 'cpu_s'), digits=2)))
 
-    try:
-        with open(os.path.join(bl.results_dir(), 'engine.txt')) as f:
-            engine = f.read().rstrip()
+    engine, engine_from = engine_table()
+    if engine:
         print()
-        print('## The engine alone (build/bench/engine-bench: in-memory bus, virtual time, floor 1 ms)')
+        print('## The engine alone (build/bench/engine-bench, %s: in-memory bus, virtual time, floor 1 ms)'
+              % engine_from)
         print(engine)
-    except OSError:
-        pass
 
     if dl:
         print()
@@ -313,6 +347,25 @@ def main():
             print('%-58s %6d %8d %6d %9.1f %9.1f %9.1f  %s' % (
                 'Execute(SwitchModeSelective, InquireNodeId), queue %s' % j['queue_size'], j['calls'], j['answered'],
                 j['lost'], j['p50_ms'], j['p99_ms'], j['max_ms'], j['errors'] or '-'))
+
+    eng = engine_per_node(engine)
+    rows = [(mode, n) for mode in ('mapped', 'vendor', 'blind') for n in sorted({k[2] for k in medians})
+            if ('vm', mode, n) in medians and (ENGINE_CASE[mode], n) in eng]
+    if rows:
+        print()
+        print('## lssd in the VM against the engine alone (engine-bench, virtual time): s/node and their ratio')
+        print('%-31s %3s %-27s %13s %12s %13s %12s' % ('case', 'N', 'engine case', 'lssd s/node', 'engine s/n',
+                                                       'lssd/engine', 'hog/engine'))
+        for mode, n in rows:
+            lssd_pn = medians[('vm', mode, n)] / n
+            eng_pn = eng[(ENGINE_CASE[mode], n)]
+            hog_pn = hog_medians.get((mode, n))
+            print('%-31s %3d %-27s %13.3f %12.3f %12.2fx %12s' % (
+                LABEL[mode], n, {'a': '(a) blind fastscan', 'b': '(b) vendor+product known',
+                                 'c': '(c) full identity known'}[ENGINE_CASE[mode]], lssd_pn, eng_pn,
+                lssd_pn / eng_pn, '%.2fx' % (hog_pn / n / eng_pn) if hog_pn else '-'))
+        print('# lssd s/node: median wall time / N (VM, vcan0, idle); engine s/n: engine-bench ms/node (same latency '
+              'and bus, virtual time); hog: the CPU hog runs')
 
     if history:
         print()
