@@ -354,18 +354,24 @@ def main():
     if rows:
         print()
         print('## lssd in the VM against the engine alone (engine-bench, virtual time): s/node and their ratio')
-        print('%-31s %3s %-27s %13s %12s %13s %12s' % ('case', 'N', 'engine case', 'lssd s/node', 'engine s/n',
-                                                       'lssd/engine', 'hog/engine'))
+        print('%-31s %3s %-27s %13s %12s %13s %12s %16s' % ('case', 'N', 'engine case', 'lssd s/node', 'engine s/n',
+                                                            'lssd/engine', 'hog/engine', 'blind: (d)+(c)'))
         for mode, n in rows:
             lssd_pn = medians[('vm', mode, n)] / n
             eng_pn = eng[(ENGINE_CASE[mode], n)]
             hog_pn = hog_medians.get((mode, n))
-            print('%-31s %3d %-27s %13.3f %12.3f %12.2fx %12s' % (
+            dc = None
+            if mode == 'blind' and ('d', n) in eng and ('c', n) in eng:
+                dc = eng[('d', n)] + eng[('c', n)]
+            print('%-31s %3d %-27s %13.3f %12.3f %12.2fx %12s %16s' % (
                 LABEL[mode], n, {'a': '(a) blind fastscan', 'b': '(b) vendor+product known',
                                  'c': '(c) full identity known'}[ENGINE_CASE[mode]], lssd_pn, eng_pn,
-                lssd_pn / eng_pn, '%.2fx' % (hog_pn / n / eng_pn) if hog_pn else '-'))
+                lssd_pn / eng_pn, '%.2fx' % (hog_pn / n / eng_pn) if hog_pn else '-',
+                '%.3f: %.2fx' % (dc, lssd_pn / dc) if dc else '-'))
         print('# lssd s/node: median wall time / N (VM, vcan0, idle); engine s/n: engine-bench ms/node (same latency '
               'and bus, virtual time); hog: the CPU hog runs')
+        print("# (d)+(c): lssd's AutoAssign finds non-configured devices by one fastscan enumeration (as (d)) and "
+              'assigns each by selective switch (as (c)): their s/node summed, and lssd blind / that')
 
     if history:
         print()
