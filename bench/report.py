@@ -6,6 +6,8 @@ line the speedup of lssd over python-canopen at N = 8."""
 
 import os
 import platform
+import re
+import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -17,6 +19,41 @@ LABEL = {'mapped': 'lssd, map (full identities)', 'vendor': 'lssd, vendor/produc
          'vendor-canopennode': 'lssd, vendor known, CANopenNode', 'blind-canopennode': 'lssd, blind, CANopenNode',
          'canopen': 'python-canopen fast_scan loop'}
 SPEEDUP_NAME = {'mapped': 'mapped', 'vendor': 'known-vendor', 'blind': 'blind'}
+# lssd's modes and engine-bench's cases: the same knowledge of the slaves
+ENGINE_CASE = {'mapped': 'c', 'vendor': 'b', 'blind': 'a'}
+ENGINE_ROW = re.compile(r'^\(([a-d])\)\D*?\s+(\d+)\s+(\d+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)x\s*$')
+PARALLEL_MAX = 1.2  # "about as long as the slowest bus alone"
+
+
+def engine_table():
+    """engine-bench's output: run now (LSSD_ENGINE_BENCH or BUILDDIR/bench/engine-bench, ~1 s;
+    saved as engine.txt), else the engine phase's engine.txt. Returns (text, where)."""
+    path = os.environ.get('LSSD_ENGINE_BENCH') or os.path.join(os.path.dirname(bl.results_dir()), 'bench',
+                                                                'engine-bench')
+    if os.access(path, os.X_OK):
+        try:
+            p = subprocess.run([path], capture_output=True, text=True, timeout=300)
+            if p.returncode == 0 and p.stdout.strip():
+                with open(os.path.join(bl.results_dir(), 'engine.txt'), 'w') as f:
+                    f.write(p.stdout)
+                return p.stdout.rstrip(), 'run now'
+        except (OSError, subprocess.SubprocessError):
+            pass
+    try:
+        with open(os.path.join(bl.results_dir(), 'engine.txt')) as f:
+            return f.read().rstrip(), 'engine.txt'
+    except OSError:
+        return '', ''
+
+
+def engine_per_node(text):
+    """{(case letter, N): s/node in virtual time} from engine-bench's first table."""
+    out = {}
+    for line in text.splitlines():
+        m = ENGINE_ROW.match(line)
+        if m:
+            out[(m.group(1), int(m.group(2)))] = float(m.group(7)) / 1000
+    return out
 
 
 def machine():
@@ -115,11 +152,86 @@ def main():
             t = [r['elapsed_s'] for r in runs]
             print('# python-canopen N=%d: its own fixed waits (0.5 s timeouts, 10 ms pauses) %.1f s median = %.0f%% '
                   'of its time' % (n, bl.summary(w)['median'], 100 * sum(w) / sum(t)))
-    if allcases:
+    if medians:
         print('# time: wall time of the whole procedure (one AutoAssign call; python-canopen: its loop until '
               'fast_scan finds nothing);')
         print('# frames: every frame on vcan0 meanwhile (candump); floor: their bus time at 125 kbit/s with exact '
               'bit stuffing; x floor = time / floor')
+
+    # ---- the same cases with a CPU hog on every vCPU, beside the idle figures ----
+    hog = {(m, n): c for (i, m, n), c in allcases.items() if i == 'lssd-hog'}
+    hog_medians = {}
+    if hog:
+        print()
+        print('## Auto-addressing with a CPU hog: a spinning shell on every vCPU of the VM (%s), beside the idle '
+              'figures above (vcan0, same slaves)' % ', '.join(sorted({str(c.get('hog_processes', '?'))
+                                                                     for c in hog.values()})))
+        print('%-31s %3s %4s %9s %-26s %8s %8s %8s %-22s %s' % (
+            'case', 'N', 'reps', 'idle s', 'CPU hog s: median (min-max)', 'idle s/n', 'hog s/n', 'hog/idle',
+            'lssd CPU s (hog)', 'results'))
+        for mode in ORDER:
+            for n in sorted({k[1] for k in hog}):
+                c = hog.get((mode, n))
+                if not c:
+                    continue
+                runs = ok_runs(c)
+                bad = len(c['runs']) - len(runs)
+                for r in c['runs']:
+                    if 'failed' in r:
+                        failures.append('%s %s N=%d rep %d: %s' % (c['impl'], mode, n, r['rep'], r['failed']))
+                right = '%d of %d right' % (len(runs), len(c['runs'])) + (' !!!! %d WRONG' % bad if bad else '')
+                t = med(runs, 'elapsed_s')
+                idle = medians.get(('vm', mode, n))
+                if not t.get('n'):
+                    print('%-31s %3d %4d %9s %-26s %8s %8s %8s %-22s %s' % (
+                        LABEL[mode], n, len(c['runs']), '%.3f' % idle if idle else '-', 'FAILED', '-', '-', '-', '-',
+                        right))
+                    continue
+                hog_medians[(mode, n)] = t['median']
+                print('%-31s %3d %4d %9s %-26s %8s %8.3f %8s %-22s %s' % (
+                    LABEL[mode], n, len(runs), '%.3f' % idle if idle else '-', fmt_spread(t),
+                    '%.3f' % (idle / n) if idle else '-', t['median'] / n,
+                    '%.2fx' % (t['median'] / idle) if idle else '-', fmt_spread(med(runs, 'cpu_s'), digits=2), right))
+        print('# results: runs whose every slave got the expected node-ID (reply and state files, as above); '
+              'slower is fine')
+
+    # ---- buses in parallel ----
+    par = {(v['mode'], v['n']): v for k, v in res.items() if k.startswith('parallel-')}
+    par_ratio = {}
+    if par:
+        nb = max(len(v.get('buses', [])) for v in par.values())
+        print()
+        print('## Buses in parallel: AutoAssign on %d vcan buses at once vs each bus alone (VM; one lssd with the %d '
+              'buses, one lss-sim per bus, N slaves per bus)' % (nb, nb))
+        print('%-31s %5s %4s %-26s %-26s %7s %-27s %-27s %s' % (
+            'case', 'N/bus', 'reps', 'slowest alone s: median', 'all at once s: median', 'ratio',
+            'alone per bus s (rep 0)', 'at once per bus s (rep 0)', 'results'))
+        for mode in ORDER:
+            for n in sorted({k[1] for k in par}):
+                c = par.get((mode, n))
+                if not c:
+                    continue
+                runs = ok_runs(c)
+                bad = len(c['runs']) - len(runs)
+                for r in c['runs']:
+                    if 'failed' in r:
+                        failures.append('parallel %s N=%d rep %d: %s' % (mode, n, r['rep'], r['failed']))
+                right = '%d of %d right' % (len(runs), len(c['runs'])) + (' !!!! %d WRONG' % bad if bad else '')
+                if not runs:
+                    print('%-31s %5d %4d FAILED %s' % (LABEL[mode], n, len(c['runs']), right))
+                    continue
+                ratio = bl.summary([r['ratio'] for r in runs])
+                par_ratio[(mode, n)] = ratio['median']
+                r0 = runs[0]
+                print('%-31s %5d %4d %-26s %-26s %6.2fx %-27s %-27s %s' % (
+                    LABEL[mode], n, len(runs), fmt_spread(med(runs, 'slowest_alone_s')),
+                    fmt_spread(med(runs, 'parallel_s')), ratio['median'],
+                    '/'.join('%.2f' % t for t in r0['alone']['bus_s']),
+                    '/'.join('%.2f' % t for t in r0['parallel']['bus_s']), right))
+        print('# alone: AutoAssign on one bus after the other (fresh slaves), each call timed; at once: one call per '
+              'bus, sent together, timed to the last reply;')
+        print('# ratio = at once / slowest alone (target: about 1x); results: every slave of every bus at its node-ID '
+              '(reply and state files)')
 
     # ---- targets ----
     print()
@@ -149,7 +261,16 @@ def main():
         if fp and 'scan' in fp and 'failed' not in fp['scan']:
             targets.append(('blind Scan of %d slaves (vm) <= 70 s' % fp['slaves'], fp['scan']['elapsed_s'] <= 70,
                             '%.1f s' % fp['scan']['elapsed_s']))
-    n_runs = sum(len(c['runs']) for c in allcases.values())
+    for (mode, n), x in sorted(par_ratio.items(), key=lambda kv: (ORDER.index(kv[0][0]), kv[0][1])):
+        targets.append(('lssd %s, %d buses at once, N=%d/bus: <= %.1fx slowest alone' % (
+            mode, max(len(v.get('buses', [])) for v in par.values()), n, PARALLEL_MAX), x <= PARALLEL_MAX,
+            '%.2fx' % x))
+    if hog:
+        hog_runs = sum(len(c['runs']) for c in hog.values())
+        hog_bad = sum(1 for c in hog.values() for r in c['runs'] if 'failed' in r)
+        targets.append(('every result right with a CPU hog on every vCPU (%d runs)' % hog_runs, hog_bad == 0,
+                        '%d wrong' % hog_bad))
+    n_runs = sum(len(c['runs']) for c in allcases.values()) + 2 * sum(len(c['runs']) for c in par.values())
     try:
         with open(os.path.join(bl.results_dir(), 'failures.log')) as f:
             history = [line.rstrip() for line in f if line.strip()]
@@ -206,14 +327,12 @@ def main():
                     mode, 'vcan in the VM' if impl == 'lssd' else 'lssd --simulate, host',
                     fmt_spread(med(ok_runs(c), 'cpu_s'), digits=2)))
 
-    try:
-        with open(os.path.join(bl.results_dir(), 'engine.txt')) as f:
-            engine = f.read().rstrip()
+    engine, engine_from = engine_table()
+    if engine:
         print()
-        print('## The engine alone (build/bench/engine-bench: in-memory bus, virtual time, floor 1 ms)')
+        print('## The engine alone (build/bench/engine-bench, %s: in-memory bus, virtual time, floor 1 ms)'
+              % engine_from)
         print(engine)
-    except OSError:
-        pass
 
     if dl:
         print()
@@ -228,6 +347,31 @@ def main():
             print('%-58s %6d %8d %6d %9.1f %9.1f %9.1f  %s' % (
                 'Execute(SwitchModeSelective, InquireNodeId), queue %s' % j['queue_size'], j['calls'], j['answered'],
                 j['lost'], j['p50_ms'], j['p99_ms'], j['max_ms'], j['errors'] or '-'))
+
+    eng = engine_per_node(engine)
+    rows = [(mode, n) for mode in ('mapped', 'vendor', 'blind') for n in sorted({k[2] for k in medians})
+            if ('vm', mode, n) in medians and (ENGINE_CASE[mode], n) in eng]
+    if rows:
+        print()
+        print('## lssd in the VM against the engine alone (engine-bench, virtual time): s/node and their ratio')
+        print('%-31s %3s %-27s %13s %12s %13s %12s %16s' % ('case', 'N', 'engine case', 'lssd s/node', 'engine s/n',
+                                                            'lssd/engine', 'hog/engine', 'blind: (d)+(c)'))
+        for mode, n in rows:
+            lssd_pn = medians[('vm', mode, n)] / n
+            eng_pn = eng[(ENGINE_CASE[mode], n)]
+            hog_pn = hog_medians.get((mode, n))
+            dc = None
+            if mode == 'blind' and ('d', n) in eng and ('c', n) in eng:
+                dc = eng[('d', n)] + eng[('c', n)]
+            print('%-31s %3d %-27s %13.3f %12.3f %12.2fx %12s %16s' % (
+                LABEL[mode], n, {'a': '(a) blind fastscan', 'b': '(b) vendor+product known',
+                                 'c': '(c) full identity known'}[ENGINE_CASE[mode]], lssd_pn, eng_pn,
+                lssd_pn / eng_pn, '%.2fx' % (hog_pn / n / eng_pn) if hog_pn else '-',
+                '%.3f: %.2fx' % (dc, lssd_pn / dc) if dc else '-'))
+        print('# lssd s/node: median wall time / N (VM, vcan0, idle); engine s/n: engine-bench ms/node (same latency '
+              'and bus, virtual time); hog: the CPU hog runs')
+        print("# (d)+(c): lssd's AutoAssign finds non-configured devices by one fastscan enumeration (as (d)) and "
+              'assigns each by selective switch (as (c)): their s/node summed, and lssd blind / that')
 
     if history:
         print()
