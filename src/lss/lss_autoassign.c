@@ -31,8 +31,9 @@ typedef struct lss_aa_state {
         bool changed;
         uint8_t target;
         enum lss_service *failed_at; /* per map entry: the service its first look failed at */
-        bool unstored[128];     /* the caller's unstored node-IDs, and those the second look
-                                 * must store again (a first look that failed at Store) */
+        bool restore[128];      /* node-IDs the second look must store again (a first look
+                                 * silent after Configure Node-ID or at Store) */
+        bool unstored[128];     /* those and the caller's, as they are now */
         bool taken[128];        /* answered the SDO probe at the start (before an NMT Stop) */
         bool free[128];         /* silent to it, and nobody assigned there since */
         lss_probe_state probe;
@@ -200,6 +201,14 @@ static unsigned assign_flags(const lss_aa_state *s) {
                (s->plan->dry_run ? LSS_ASSIGN_DRY_RUN : 0);
 }
 
+/* The node-IDs that may not be stored: the caller's table is live (lssd adds
+ * the node-IDs it hears boot up during the pass), the second look adds its own. */
+static const bool *unstored_now(lss_aa_state *s) {
+        for (unsigned i = 0; i < 128; i++)
+                s->unstored[i] = s->restore[i] || (s->plan->unstored && s->plan->unstored[i]);
+        return s->unstored;
+}
+
 /* After an assignment: what the probe at the start said no longer holds for
  * the node-ID the device left (probed again when needed) or took. */
 static void moved(lss_aa_state *s, const lss_master *m) {
@@ -254,7 +263,7 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                         m->as.flags = assign_flags(s);
                         m->as.taken = s->taken;
                         m->as.free = s->free;
-                        m->as.unstored = s->unstored;
+                        m->as.unstored = unstored_now(s);
                         PT_CALL(&s->i_pc, proc_assign(m, &m->as));
                         /* a pool ID somebody already answers to: take the next one */
                         if (s->entry < 0 && m->result.in_use) {
@@ -295,7 +304,7 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                 m->as.flags = assign_flags(s);
                 m->as.taken = s->taken;
                 m->as.free = s->free;
-                m->as.unstored = s->unstored;
+                m->as.unstored = unstored_now(s);
                 PT_CALL(&s->d_pc, proc_assign(m, &m->as));
                 if (m->result.status != LSS_E_NOT_FOUND) {
                         s->handled[s->i] = true;
@@ -348,7 +357,7 @@ static size_t second_look_entries(lss_aa_state *s) {
                                  * have the node-ID and not have stored it */
                                 if (s->failed_at[i] == LSS_SERVICE_CONFIGURE_NODE_ID ||
                                     s->failed_at[i] == LSS_SERVICE_STORE)
-                                        s->unstored[s->plan->map[i].node_id] = true;
+                                        s->restore[s->plan->map[i].node_id] = true;
                                 k++;
                         } else if (o->kind == LSS_OUTCOME_MISSING && o->status == LSS_E_NOT_FOUND) {
                                 /* the second look says what became of it */
@@ -510,8 +519,6 @@ int lss_master_autoassign(lss_master *m, const lss_autoassign_plan *plan, uint64
         if (!m->aa)
                 return -ENOMEM;
         m->aa->plan = plan;
-        if (plan->unstored)
-                memcpy(m->aa->unstored, plan->unstored, sizeof(m->aa->unstored));
         m->stats.patient_wait_us = 0;
         m->aa->handled = calloc(plan->n_map + 1, sizeof(bool));
         m->aa->first = calloc(plan->n_map + 1, sizeof(lss_outcome));

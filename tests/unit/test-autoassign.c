@@ -533,36 +533,48 @@ END_TEST
  * pending ID when switched back to waiting, its stored ID is still the old
  * one. The daemon saw it boot up then and marks the node-ID unstored; the
  * next pass stores it instead of calling it unchanged. Only marked ones. */
+/* lssd learns an unstored node-ID from the boot-up it hears after its switch
+ * to waiting, which may come after the pass started: the table is live. */
+static void mark_40_unstored(void *ud, membus *bus, lss_master *m) {
+        (void) bus;
+        (void) m;
+        ((bool *) ud)[40] = true;
+}
+
 START_TEST(interrupted_pass_is_stored) {
-        membus *b = bus_random(2, 311, 0xEC, 0x1234, NULL);
-        lss_map_entry map[2];
-        for (size_t i = 0; i < 2; i++) {
-                lss_slave_state *st = &membus_slave(b, i)->st;
-                st->active_node_id = st->pending_node_id = (uint8_t) (40 + i);
-                st->stored_node_id = LSS_NODE_ID_UNCONFIGURED;
-                map[i] = (lss_map_entry) { .id = membus_slave(b, i)->id, .revision_known = true,
-                                           .node_id = (uint8_t) (40 + i) };
+        for (int live = 0; live <= 1; live++) {
+                membus *b = bus_random(2, 311, 0xEC, 0x1234, NULL);
+                lss_map_entry map[2];
+                for (size_t i = 0; i < 2; i++) {
+                        lss_slave_state *st = &membus_slave(b, i)->st;
+                        st->active_node_id = st->pending_node_id = (uint8_t) (40 + i);
+                        st->stored_node_id = LSS_NODE_ID_UNCONFIGURED;
+                        map[i] = (lss_map_entry) { .id = membus_slave(b, i)->id, .revision_known = true,
+                                                   .node_id = (uint8_t) (40 + i) };
+                }
+                bool unstored[128] = { [40] = !live };
+                lss_autoassign_plan p = { .map = map, .n_map = 2, .store = true, .unstored = unstored };
+                frame_count c = { 0 };
+                membus_set_trace(b, count, &c);
+                lss_master *m = master_default();
+                ck_assert_int_eq(lss_master_autoassign(m, &p, membus_now(b)), 0);
+                ck_assert_int_eq(lss_drive(m, b, 600 * SECOND, live ? mark_40_unstored : NULL, unstored)->status,
+                                 LSS_OK);
+                const lss_outcome *o = outcome_of(m, &membus_slave(b, 0)->id);
+                ck_assert_ptr_nonnull(o);
+                ck_assert_msg(o->kind == LSS_OUTCOME_ASSIGNED, "%s %s", lss_outcome_name(o->kind), o->message);
+                ck_assert_uint_eq(o->old_node_id, 40);
+                ck_assert_uint_eq(membus_slave(b, 0)->st.stored_node_id, 40);
+                o = outcome_of(m, &membus_slave(b, 1)->id);
+                ck_assert_ptr_nonnull(o);
+                ck_assert_int_eq(o->kind, LSS_OUTCOME_UNCHANGED);
+                ck_assert_uint_eq(membus_slave(b, 1)->st.stored_node_id, LSS_NODE_ID_UNCONFIGURED);
+                ck_assert_uint_eq(c.configure, 0);
+                ck_assert_uint_eq(c.store, 1);
+                ck_assert(all_waiting(b));
+                lss_master_free(m);
+                membus_free(b);
         }
-        bool unstored[128] = { [40] = true };
-        lss_autoassign_plan p = { .map = map, .n_map = 2, .store = true, .unstored = unstored };
-        frame_count c = { 0 };
-        membus_set_trace(b, count, &c);
-        lss_master *m = master_default();
-        ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
-        const lss_outcome *o = outcome_of(m, &membus_slave(b, 0)->id);
-        ck_assert_ptr_nonnull(o);
-        ck_assert_msg(o->kind == LSS_OUTCOME_ASSIGNED, "%s %s", lss_outcome_name(o->kind), o->message);
-        ck_assert_uint_eq(o->old_node_id, 40);
-        ck_assert_uint_eq(membus_slave(b, 0)->st.stored_node_id, 40);
-        o = outcome_of(m, &membus_slave(b, 1)->id);
-        ck_assert_ptr_nonnull(o);
-        ck_assert_int_eq(o->kind, LSS_OUTCOME_UNCHANGED);
-        ck_assert_uint_eq(membus_slave(b, 1)->st.stored_node_id, LSS_NODE_ID_UNCONFIGURED);
-        ck_assert_uint_eq(c.configure, 0);
-        ck_assert_uint_eq(c.store, 1);
-        ck_assert(all_waiting(b));
-        lss_master_free(m);
-        membus_free(b);
 }
 END_TEST
 
