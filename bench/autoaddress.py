@@ -255,12 +255,7 @@ def main():
         run_cases(a, impl, lssd, ns, modes, reps, failures)
     finally:
         stop_hogs(hogs)
-    if failures:
-        bl.log('\n!!!! %d WRONG RESULTS — the bench FAILS:' % len(failures))
-        for f in failures:
-            bl.log('!!!!   ' + f)
-        return 1
-    return 0
+    return bl.report_failures(failures)
 
 
 def run_cases(a, impl, lssd, ns, modes, reps, failures):

@@ -173,6 +173,16 @@ def source_version():
         return '?'
 
 
+def report_failures(failures):
+    """Log the wrong results of a phase; its exit status (1 when any)."""
+    if not failures:
+        return 0
+    log('\n!!!! %d WRONG RESULTS — the bench FAILS:' % len(failures))
+    for f in failures:
+        log('!!!!   ' + f)
+    return 1
+
+
 def record_failure(text):
     """Every wrong result ever seen stays in failures.log (a rerun replaces a
     case's JSON file, not this)."""

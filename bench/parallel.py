@@ -174,12 +174,7 @@ def main():
     finally:
         for ifname in created:
             subprocess.run(['ip', 'link', 'del', 'dev', ifname], check=False)
-    if failures:
-        bl.log('\n!!!! %d WRONG RESULTS — the bench FAILS:' % len(failures))
-        for f in failures:
-            bl.log('!!!!   ' + f)
-        return 1
-    return 0
+    return bl.report_failures(failures)
 
 
 if __name__ == '__main__':

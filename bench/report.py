@@ -73,6 +73,17 @@ def ok_runs(case):
     return [r for r in case['runs'] if 'failed' not in r]
 
 
+def tally(c, what, failures):
+    """The runs of a case whose every slave was right, 'k of n right' for
+    the table, and a line in `failures` for each wrong run."""
+    runs = ok_runs(c)
+    bad = len(c['runs']) - len(runs)
+    for r in c['runs']:
+        if 'failed' in r:
+            failures.append('%s rep %d: %s' % (what, r['rep'], r['failed']))
+    return runs, '%d of %d right' % (len(runs), len(c['runs'])) + (' !!!! %d WRONG' % bad if bad else '')
+
+
 def med(runs, key):
     s = bl.summary([r[key] for r in runs if key in r])
     return s
@@ -122,10 +133,7 @@ def main():
                 c = cases.get((mode, n))
                 if not c:
                     continue
-                runs = ok_runs(c)
-                for r in c['runs']:
-                    if 'failed' in r:
-                        failures.append('%s %s N=%d rep %d: %s' % (c['impl'], mode, n, r['rep'], r['failed']))
+                runs, _ = tally(c, '%s %s N=%d' % (c['impl'], mode, n), failures)
                 t = med(runs, 'elapsed_s')
                 bad = len(c['runs']) - len(runs)
                 if not t.get('n'):
@@ -174,12 +182,7 @@ def main():
                 c = hog.get((mode, n))
                 if not c:
                     continue
-                runs = ok_runs(c)
-                bad = len(c['runs']) - len(runs)
-                for r in c['runs']:
-                    if 'failed' in r:
-                        failures.append('%s %s N=%d rep %d: %s' % (c['impl'], mode, n, r['rep'], r['failed']))
-                right = '%d of %d right' % (len(runs), len(c['runs'])) + (' !!!! %d WRONG' % bad if bad else '')
+                runs, right = tally(c, '%s %s N=%d' % (c['impl'], mode, n), failures)
                 t = med(runs, 'elapsed_s')
                 idle = medians.get(('vm', mode, n))
                 if not t.get('n'):
@@ -211,12 +214,7 @@ def main():
                 c = par.get((mode, n))
                 if not c:
                     continue
-                runs = ok_runs(c)
-                bad = len(c['runs']) - len(runs)
-                for r in c['runs']:
-                    if 'failed' in r:
-                        failures.append('parallel %s N=%d rep %d: %s' % (mode, n, r['rep'], r['failed']))
-                right = '%d of %d right' % (len(runs), len(c['runs'])) + (' !!!! %d WRONG' % bad if bad else '')
+                runs, right = tally(c, 'parallel %s N=%d' % (mode, n), failures)
                 if not runs:
                     print('%-31s %5d %4d FAILED %s' % (LABEL[mode], n, len(c['runs']), right))
                     continue
