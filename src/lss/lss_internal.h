@@ -89,6 +89,7 @@ typedef struct lss_range_item {
         uint32_t rlo, rhi, slo, shi;
         unsigned asks;          /* times asked and silent */
         bool root;              /* the whole range: nothing above it would notice a lost answer */
+        bool gap;               /* between slaves found: asked once more at the end */
         /* the high half of a split: where its low half starts (revision or
          * serial), and whether the low half was silent */
         bool high, by_rev, low_silent;
@@ -126,6 +127,8 @@ typedef struct lss_scan_state {
         lss_identify_range range;
         lss_fastscan_state fs;
         unsigned pass, i, dropped, failed_scans, attempt, unresolved;
+        unsigned gap_passes;    /* slowscan: times the ranges between the slaves found were asked again */
+        size_t n_before_gaps;   /* slowscan: slaves found before the last of those */
         /* slowscan: stack of intervals still to query */
         lss_range_item *stack, cur;
         size_t n_stack, cap_stack;

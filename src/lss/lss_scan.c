@@ -9,7 +9,8 @@
  * verified as soon as the bisection singles it out, by selective switch (the
  * 0x44 answer can only come from a slave with that exact identity), and
  * asked its node-ID, then announced (lss_master_set_found); a step nobody
- * answers is asked again: one late or lost frame must not cost a slave.
+ * answers is asked again: one late or lost frame must not cost a slave. At
+ * the end everything between the slaves found is asked once more.
  * (Enumeration by fastscan is in lss_enumerate.c.) */
 #include <errno.h>
 #include <stdlib.h>
@@ -97,6 +98,56 @@ out:;
         PT_END(&s->vpc);
 }
 
+static int push_box(lss_scan_state *s, uint32_t rlo, uint32_t rhi, uint32_t slo, uint32_t shi) {
+        return stack_push(s, (lss_range_item) { .rlo = rlo, .rhi = rhi, .slo = slo, .shi = shi, .gap = true });
+}
+
+static int by_revision_serial(const void *a, const void *b) {
+        const lss_identity *x = &((const lss_device *) a)->id, *y = &((const lss_device *) b)->id;
+        if (x->revision != y->revision)
+                return x->revision < y->revision ? -1 : 1;
+        return x->serial < y->serial ? -1 : x->serial > y->serial;
+}
+
+/* Everything of the range between the slaves found, as boxes of
+ * revisions x serials: a slave whose half was silent twice while the other
+ * half answered lies in one of them. */
+static int push_gaps(lss_scan_state *s) {
+        const lss_identify_range *r = &s->range;
+        uint32_t r1 = r->rev_lo, s1 = r->serial_lo;
+        bool before_first = true;
+        qsort(s->cand, s->n_cand, sizeof(*s->cand), by_revision_serial);
+        for (size_t i = 0; i <= s->n_cand; i++) {
+                bool end = i == s->n_cand;
+                uint32_t r2 = end ? r->rev_hi : s->cand[i].id.revision;
+                uint32_t s2 = end ? r->serial_hi : s->cand[i].id.serial;
+                /* from just after (r1, s1) (or from (r1, s1) itself before the
+                 * first slave) to just before (r2, s2) (or (r2, s2) itself at the end) */
+                bool from_incl = before_first, to_incl = end;
+                int e = 0;
+                if (r1 == r2) {
+                        uint64_t lo = (uint64_t) s1 + !from_incl, hi = (uint64_t) s2 + to_incl;
+                        if (hi > lo)
+                                e |= push_box(s, r1, r1, (uint32_t) lo, (uint32_t) (hi - 1));
+                } else {
+                        if (from_incl || s1 < r->serial_hi)
+                                e |= push_box(s, r1, r1, from_incl ? s1 : s1 + 1, r->serial_hi);
+                        if ((uint64_t) r2 > (uint64_t) r1 + 1)
+                                e |= push_box(s, r1 + 1, r2 - 1, r->serial_lo, r->serial_hi);
+                        if (to_incl || s2 > r->serial_lo)
+                                e |= push_box(s, r2, r2, r->serial_lo, to_incl ? s2 : s2 - 1);
+                }
+                if (e)
+                        return -ENOMEM;
+                if (!end) {
+                        r1 = r2;
+                        s1 = s2;
+                        before_first = false;
+                }
+        }
+        return 0;
+}
+
 int proc_slowscan(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->n_cand = s->n_stack = 0;
@@ -107,6 +158,8 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
                                              .root = true }) < 0)
                 goto oom;
         s->i = 0;
+        s->gap_passes = 0;
+again:
         while (s->n_stack > 0) {
                 s->cur = s->stack[--s->n_stack];
                 step_lss(m, LSS_CS_IDENTIFY_SLAVE);
@@ -122,6 +175,11 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
                 }
                 step_start(m);
                 PT_YIELD(&s->pc);
+                if (!step_answered(m) && s->cur.gap) {
+                        if (++s->cur.asks < 2) /* asked twice, like any half */
+                                s->stack[s->n_stack++] = s->cur;
+                        continue;
+                }
                 if (!step_answered(m)) {
                         /* Unlike fastscan, nothing later would notice a missed
                          * answer (a slow slave): ask a silent range once more
@@ -157,6 +215,19 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
                 }
                 if (split(s, &s->cur, 0) < 0)
                         goto oom;
+        }
+        if (s->n_cand > 0 && m->result.status == LSS_OK && !m->cancelling &&
+            (s->gap_passes == 0 || (s->n_cand > s->n_before_gaps && s->gap_passes <= m->timing.cfg.retries))) {
+                /* A silent half is asked twice: a slave that lost both while
+                 * the other half answered would be missed, and the scan say
+                 * OK. Everything between the slaves found is asked again
+                 * (one step per gap, a few per slave), and again while that
+                 * finds somebody. */
+                s->gap_passes++;
+                s->n_before_gaps = s->n_cand;
+                if (push_gaps(s) < 0)
+                        goto oom;
+                goto again;
         }
         if (s->n_cand > 0) {
                 /* Each verification ended with a switch to waiting, and the
