@@ -90,6 +90,7 @@ typedef struct lss_range_item {
         unsigned asks;          /* times asked and silent */
         bool root;              /* the whole range: nothing above it would notice a lost answer */
         bool gap;               /* between slaves found: asked once more at the end */
+        bool confirm;           /* both halves were silent: is the answer its own? */
         /* the high half of a split: where its low half starts (revision or
          * serial), and whether the low half was silent */
         bool high, by_rev, low_silent;
@@ -129,6 +130,7 @@ typedef struct lss_scan_state {
         unsigned pass, i, dropped, failed_scans, attempt, unresolved;
         unsigned gap_passes;    /* slowscan: times the ranges between the slaves found were asked again */
         size_t n_before_gaps;   /* slowscan: slaves found before the last of those */
+        bool heard;             /* slowscan: some range answered */
         /* slowscan: stack of intervals still to query */
         lss_range_item *stack, cur;
         size_t n_stack, cap_stack;

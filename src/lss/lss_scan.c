@@ -4,13 +4,15 @@
  * implement the identify services. A silent range is asked twice (the
  * whole range 1 + cfg.retries times) before it is dropped: a missed answer
  * would lose a slave silently. A range that answered but neither of whose
- * halves did lost an answer on the way: it is split and asked again (up to
- * cfg.retries times), and reported if that never resolves. A candidate is
+ * halves did is asked again (its answer may have been a late one of another
+ * step): split again if it answers (up to cfg.retries times), and reported
+ * if that never resolves. A candidate is
  * verified as soon as the bisection singles it out, by selective switch (the
  * 0x44 answer can only come from a slave with that exact identity), and
  * asked its node-ID, then announced (lss_master_set_found); a step nobody
  * answers is asked again: one late or lost frame must not cost a slave. At
- * the end everything between the slaves found is asked once more.
+ * the end everything between the slaves found is asked once more
+ * (docs/engine.md, "Slowscan and lost frames").
  * (Enumeration by fastscan is in lss_enumerate.c.) */
 #include <errno.h>
 #include <stdlib.h>
@@ -72,15 +74,44 @@ static lss_range_item parent_of(const lss_range_item *hi) {
         return p;
 }
 
+/* Identify Remote Slave for one range (6 frames), waiting for 0x4F. */
+static void step_identify(lss_master *m, const lss_scan_state *s, const lss_range_item *it) {
+        const uint32_t v[6] = { s->range.vendor, s->range.product, it->rlo, it->rhi, it->slo, it->shi };
+        step_lss(m, LSS_CS_IDENTIFY_SLAVE);
+        for (unsigned i = 0; i < 6; i++) {
+                lss_frame f;
+                lss_encode_identify_remote(&f, i, v[i]);
+                step_add_tx(m, &f);
+        }
+        step_start(m);
+}
+
 /* Selective switch to the candidate just found, read its node-ID, back to
  * waiting: verified, it is a result device and announced at once (the
- * bisection goes on from waiting state); else it is counted in `dropped`. */
+ * bisection goes on from waiting state); else it is counted in `dropped`.
+ * A one-identity range can answer without a slave of that identity: an
+ * identify answer does not say which request it answers, and a late one of
+ * the step before is heard in this one. So a candidate silent to the
+ * selective switch is asked its range again: silent, it was nobody;
+ * answering, it is selected once more with longer waits before it is
+ * counted. */
 static int verify_candidate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->vpc);
         SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->n_cand - 1].id);
         if (!step_answered(m)) {
-                s->dropped++;
-                goto out;
+                STEP_RETRIED(m, &s->vpc, s->attempt, step_identify(m, s, &s->cur));
+                if (!step_answered(m)) {
+                        s->n_cand--;
+                        goto out;
+                }
+                lss_timing_on_stray(&m->timing);
+                note_patience(m);
+                STEP_REQUEST(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
+                SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->n_cand - 1].id);
+                if (!step_answered(m)) {
+                        s->dropped++;
+                        goto out;
+                }
         }
         REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                         LSS_CS_INQUIRE_NODE_ID);
@@ -159,24 +190,17 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
                 goto oom;
         s->i = 0;
         s->gap_passes = 0;
+        s->heard = false;
 again:
         while (s->n_stack > 0) {
                 s->cur = s->stack[--s->n_stack];
-                step_lss(m, LSS_CS_IDENTIFY_SLAVE);
+                step_identify(m, s, &s->cur);
                 m->step.discovery = s->i++ == 0;
-                {
-                        const uint32_t v[6] = { s->range.vendor, s->range.product, s->cur.rlo,
-                                                s->cur.rhi,      s->cur.slo,       s->cur.shi };
-                        for (unsigned i = 0; i < 6; i++) {
-                                lss_frame f;
-                                lss_encode_identify_remote(&f, i, v[i]);
-                                step_add_tx(m, &f);
-                        }
-                }
-                step_start(m);
                 PT_YIELD(&s->pc);
-                if (!step_answered(m) && s->cur.gap) {
-                        if (++s->cur.asks < 2) /* asked twice, like any half */
+                if (!step_answered(m) && (s->cur.gap || s->cur.confirm)) {
+                        /* silent twice like any half (a gap 1 + retries
+                         * times: it is the last look): nobody there */
+                        if (++s->cur.asks < (s->cur.gap ? m->timing.cfg.retries + 1 : 2))
                                 s->stack[s->n_stack++] = s->cur;
                         continue;
                 }
@@ -193,16 +217,23 @@ again:
                                 if (s->n_stack > 0)
                                         s->stack[s->n_stack - 1].low_silent = true;
                         } else if (s->cur.low_silent) {
+                                /* Was the range's answer its own? A late
+                                 * answer to the step before is heard in the
+                                 * next: the range is asked again, and split
+                                 * again only if it answers. */
                                 lss_range_item p = parent_of(&s->cur);
+                                p.rechecks = s->cur.rechecks + 1;
+                                p.confirm = true;
                                 if (s->cur.rechecks >= m->timing.cfg.retries)
                                         s->unresolved++;
-                                else if (split(s, &p, s->cur.rechecks + 1) < 0)
+                                else if (stack_push(s, p) < 0)
                                         goto oom;
                                 else
                                         m->stats.retries++;
                         }
                         continue;
                 }
+                s->heard = true;
                 if (s->cur.rlo == s->cur.rhi && s->cur.slo == s->cur.shi) {
                         lss_identity id = { s->range.vendor, s->range.product, s->cur.rlo, s->cur.slo };
                         if (cand_add(s, &id) < 0)
@@ -213,10 +244,10 @@ again:
                                 goto out;
                         continue;
                 }
-                if (split(s, &s->cur, 0) < 0)
+                if (split(s, &s->cur, s->cur.confirm ? s->cur.rechecks : 0) < 0)
                         goto oom;
         }
-        if (s->n_cand > 0 && m->result.status == LSS_OK && !m->cancelling &&
+        if ((s->n_cand > 0 || s->heard) && m->result.status == LSS_OK && !m->cancelling &&
             (s->gap_passes == 0 || (s->n_cand > s->n_before_gaps && s->gap_passes <= m->timing.cfg.retries))) {
                 /* A silent half is asked twice: a slave that lost both while
                  * the other half answered would be missed, and the scan say
@@ -239,13 +270,13 @@ again:
         if (s->unresolved > 0) {
                 if (s->dropped > 0)
                         master_fail(m, LSS_E_INCOMPLETE,
-                                    "%u ranges answered identify but neither of their halves did (a slave left, or "
-                                    "its answers were lost); %u slaves answered identify but not the selective switch",
+                                    "%u ranges answered identify each time but neither half did (not CiA 305, or "
+                                    "answers lost); %u slaves answered identify but not the selective switch",
                                     s->unresolved, s->dropped);
                 else
                         master_fail(m, LSS_E_INCOMPLETE,
-                                    "%u ranges answered identify but neither of their halves did (a slave left, or "
-                                    "its answers were lost)", s->unresolved);
+                                    "%u ranges answered identify each time but neither half did (not CiA 305, or "
+                                    "answers lost)", s->unresolved);
         } else if (s->dropped > 0)
                 master_fail(m, LSS_E_INCOMPLETE, "%u slaves answered identify but not the selective switch",
                             s->dropped);

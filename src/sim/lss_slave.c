@@ -232,8 +232,8 @@ static void identify_remote(lss_slave *s, unsigned step, uint32_t value) {
         bool ok;
         switch (step) {
         case 1: ok = s->id.product == value; break;
-        case 2: ok = s->id.revision >= value; break;
-        case 3: ok = s->id.revision <= value; break;
+        case 2: ok = s->faults.identify_strict_rev ? s->id.revision > value : s->id.revision >= value; break;
+        case 3: ok = s->faults.identify_strict_rev ? s->id.revision < value : s->id.revision <= value; break;
         case 4: ok = s->id.serial >= value; break;
         default: ok = s->id.serial <= value; break;
         }

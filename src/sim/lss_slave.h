@@ -43,6 +43,9 @@ typedef struct lss_slave_faults {
         enum lss_slave_early_config early_config;
         bool needs_nmt_stopped;   /* accepts LSS only in NMT Stopped */
         bool no_identify;         /* no 0x46..0x4B, 0x4C services (CANopenNode) */
+        bool identify_strict_rev; /* identify remote: revision strictly inside the
+                                   * bounds (an off-by-one), so no range of
+                                   * one revision answers */
         bool bit_timing_silent;   /* Configure Bit Timing ignored, no answer */
         uint32_t bit_index_unsupported; /* bitmask of table-0 indexes answered err 1 */
         bool miss_activation;     /* does not hear Activate Bit Timing */

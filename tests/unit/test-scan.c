@@ -138,9 +138,8 @@ static const lss_result *scan_lossy(bool slow, size_t n, uint64_t seed, membus *
 START_TEST(scans_keep_lossy_slaves) {
         /* Enumeration: over seeds 300..699 400 of 400 find all 8 (before the
          * last pings and the selection before setting aside about 7 %
-         * missed one). Slowscan: 397 of 400 (before the gaps between the
-         * slaves found were asked again, 23.5 % missed at least one; still
-         * missed: seeds 324, 477, 593, docs/engine.md "Still missed"). Each
+         * missed one). Slowscan: 400 of 400 (before the gaps between the
+         * slaves found were asked again, 23.5 % missed at least one). Each
          * 40 seeds in a row. */
         for (size_t k = 0; k < 40; k++)
                 for (int slow = 0; slow <= 1; slow++) {
@@ -162,6 +161,31 @@ START_TEST(scans_keep_lossy_slaves) {
                         lss_master_free(m);
                         membus_free(b);
                 }
+}
+END_TEST
+
+/* Lost frames and late answers together (0.5 % receive loss, 8 ms stalls on
+ * 5 % of the answers): a slave that lost a frame of its half's first ask and
+ * answered the second late is heard in the sibling's step. The sibling's
+ * halves are then silent: the sibling is asked again (silent: its answer was
+ * another's), and the range between the slaves found is asked again at the
+ * end, where the slave answers. Before, 33 of 300 seeds (1000..1299) ended
+ * in "neither of their halves", "not the selective switch" or one short. */
+START_TEST(slowscan_late_and_lost) {
+        for (uint64_t seed = 1000; seed < 1060; seed++) {
+                lss_slave_faults f = faults_latency(2000, 500);
+                f.spike_ppm = 50000;
+                f.spike_us = 8000;
+                f.rx_loss_ppm = 5000;
+                membus *b = bus_random(2, seed, 0xEC, 0x1234, &f);
+                lss_master *m = master_default();
+                const lss_result *r = slowscan_driven(m, b, NULL, NULL);
+                ck_assert_msg(r->status == LSS_OK, "seed %u: %s", (unsigned) seed, r->message);
+                ck_assert_msg(r->n_devices == 2, "seed %u: %zu found", (unsigned) seed, r->n_devices);
+                assert_devices_real(b, r);
+                lss_master_free(m);
+                membus_free(b);
+        }
 }
 END_TEST
 
@@ -199,8 +223,10 @@ START_TEST(stalls_name_nobody) {
 }
 END_TEST
 
-/* A slave that leaves after answering the whole range: neither half answers.
- * The split is asked again a few times, then reported, not passed over. */
+/* A slave that leaves after answering the whole range: neither half
+ * answers, nor the range asked again, nor the whole range at the end. Nobody
+ * is there: OK with nobody found (the answer may as well have been a late
+ * one of another step; it is not reported as a lost slave). */
 static void leave_after_first_answer(void *ud, membus *bus, lss_master *m) {
         (void) m;
         (void) ud;
@@ -214,38 +240,31 @@ START_TEST(slowscan_slave_left) {
         found_log fl;
         found_log_start(&fl, m, b);
         const lss_result *res = slowscan_driven(m, b, leave_after_first_answer, NULL);
-        ck_assert_int_eq(res->status, LSS_E_INCOMPLETE);
-        ck_assert_msg(strstr(res->message, "neither of their halves") != NULL, "%s", res->message);
+        ck_assert_msg(res->status == LSS_OK, "%s", res->message);
         ck_assert_uint_eq(res->n_devices, 0);
         ck_assert_uint_eq(fl.n, 0);
+        ck_assert_uint_gt(lss_master_get_stats(m)->retries, 0);
         lss_master_free(m);
         membus_free(b);
 }
 END_TEST
 
-/* Both faults in one slowscan: the message counts each. Slave 1 never
- * answers the selective switch; slave 0 leaves after the K-th answer on the
- * bus, for every K until one leaves a range whose halves are both silent. */
-static void leave_after_k_answers(void *ud, membus *bus, lss_master *m) {
-        (void) m;
-        if (membus_get_stats(bus)->lss_responses >= *(const unsigned *) ud)
-                membus_slave(bus, 0)->faults.silent = true;
-}
-
-START_TEST(slowscan_left_and_unverifiable) {
-        bool both = false;
-        for (unsigned k = 1; k <= 200 && !both; k++) {
-                membus *b = bus_random(2, 255, 0xEC, 0x1234, NULL);
-                membus_slave(b, 1)->faults.ignore_cs = LSS_CS_SWITCH_SEL_SERIAL;
-                lss_master *m = master_default();
-                const lss_result *res = slowscan_driven(m, b, leave_after_k_answers, &k);
-                ck_assert_int_eq(res->status, LSS_E_INCOMPLETE);
-                both = strstr(res->message, "1 ranges answered identify but neither of their halves did") &&
-                       strstr(res->message, "; 1 slaves answered identify but not the selective switch");
-                lss_master_free(m);
-                membus_free(b);
-        }
-        ck_assert_msg(both, "no leave point gave both counts");
+/* A range that answers every time it is asked while neither of its halves
+ * ever does (here: a slave that compares its revision strictly inside the
+ * bounds, so no range of one revision holds it) is reported, with the
+ * unverifiable slave beside it counted too: never a quiet miss. */
+START_TEST(slowscan_unresolved_and_unverifiable) {
+        membus *b = bus_random(2, 255, 0xEC, 0x1234, NULL);
+        membus_slave(b, 0)->faults.identify_strict_rev = true;
+        membus_slave(b, 1)->faults.ignore_cs = LSS_CS_SWITCH_SEL_SERIAL;
+        lss_master *m = master_default();
+        const lss_result *res = slowscan_driven(m, b, NULL, NULL);
+        ck_assert_int_eq(res->status, LSS_E_INCOMPLETE);
+        ck_assert_msg(strstr(res->message, "ranges answered identify each time but neither half did") &&
+                              strstr(res->message, "; 1 slaves answered identify but not the selective switch"),
+                      "%s", res->message);
+        lss_master_free(m);
+        membus_free(b);
 }
 END_TEST
 
@@ -375,12 +394,13 @@ int main(void) {
         tcase_add_test(tc, slowscan_unverifiable);
         tcase_add_test(tc, scans_keep_lossy_slaves);
         tcase_add_test(tc, slowscan_slave_left);
-        tcase_add_test(tc, slowscan_left_and_unverifiable);
+        tcase_add_test(tc, slowscan_unresolved_and_unverifiable);
         tcase_add_test(tc, slowscan_root_asked_again);
         tcase_add_test(tc, cancel_midway);
         tcase_add_test(tc, progress_reported);
         tcase_add_test(tc, found_announced_early);
         tcase_add_test(tc, stalls_name_nobody);
+        tcase_add_test(tc, slowscan_late_and_lost);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
