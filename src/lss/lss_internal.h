@@ -161,6 +161,9 @@ struct lss_master {
         bool procedure;         /* ends with every slave in waiting, also on failure */
         bool tx_confirm;        /* the transport echoes our frames once they are on the wire */
         uint64_t now;
+        /* when a step last waited for each LSS answer cs, + 1 (0: never):
+         * only an answer to something asked lately can be a late one */
+        uint64_t asked_at[256];
 
         /* arguments and state of the running operation */
         union {

@@ -72,6 +72,8 @@ void step_start(lss_master *m) {
         for (unsigned i = 0; i < m->txq_len; i++)
                 s->tx_us += lss_timing_frame_us(&m->timing, &m->txq[(m->txq_head + i) % 16]);
         s->sent_at = m->now;
+        if (s->kind == STEP_LSS && s->expect_cs >= 0)
+                m->asked_at[s->expect_cs & 0xFF] = m->now + 1;
         s->needs_echo = s->kind == STEP_LSS && m->tx_confirm;
         s->phase = PHASE_WAIT;
         m->stats.steps++;
@@ -111,10 +113,21 @@ static bool step_matches(const lss_step *s, const lss_frame *f) {
         return s->kind == STEP_LSS && lss_is_response(f) && f->data[0] == (uint8_t) s->expect_cs;
 }
 
+/* Could f be the late answer of a step of ours? Only if a step waited for
+ * its cs lately: within twice the longest wait patience allows. A cs nobody
+ * asked for (another master's, a fault) says nothing about our timing. */
+static bool asked_lately(const lss_master *m, const lss_frame *f) {
+        uint64_t at = m->asked_at[f->data[0]];
+        uint64_t cap = (uint64_t) LSS_PATIENCE_FACTOR * m->timing.cfg.timeout_us;
+        if (cap > LSS_PATIENCE_MAX_US)
+                cap = LSS_PATIENCE_MAX_US;
+        return at != 0 && m->now + 1 - at <= 2 * cap;
+}
+
 /* An LSS answer that came when no step could take it was late for its own
  * step: the slaves or the host are slower than the waits. */
 void step_on_stray(lss_master *m, const lss_frame *f) {
-        if (!lss_is_response(f))
+        if (!lss_is_response(f) || !asked_lately(m, f))
                 return;
         m->stats.stray_answers++;
         lss_timing_on_stray(&m->timing);

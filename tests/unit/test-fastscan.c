@@ -303,6 +303,35 @@ static void inject_late(void *ud, membus *bus, lss_master *m) {
         li->injected++;
 }
 
+/* A frame that looks like an answer but whose cs no step of the operation
+ * asked for (Configure Bit Timing's, during an enumeration: another
+ * master's, a fault) is no late answer of ours: it leaves the waits alone.
+ * Before, each made the engine twice as patient. */
+START_TEST(foreign_answers_leave_waits_alone) {
+        for (int own = 0; own <= 1; own++) {
+                lss_slave_faults f = faults_latency(1000, 300);
+                membus *b = bus_random(4, 81, 0, 0, &f);
+                lss_master *m = master_default();
+                late_injector li = { .rng = 5, .every = own ? 40 : 5,
+                                     .cs = own ? LSS_CS_IDENTIFY_SLAVE : LSS_CS_CONFIGURE_BIT_TIMING };
+                ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+                const lss_result *r = lss_drive(m, b, 600 * SECOND, inject_late, &li);
+                ck_assert_uint_gt(li.injected, own ? 3 : 20);
+                ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+                ck_assert_uint_eq(r->n_devices, 4);
+                const lss_master_stats *st = lss_master_get_stats(m);
+                if (own) /* 0x4F answers every fastscan step: late ones count */
+                        ck_assert_uint_gt(st->stray_answers, 0);
+                else {
+                        ck_assert_uint_eq(st->stray_answers, 0);
+                        ck_assert_uint_eq(st->patience_us, 0);
+                }
+                lss_master_free(m);
+                membus_free(b);
+        }
+}
+END_TEST
+
 /* Each fake is an answer no step could take, which makes the engine more
  * patient (docs/engine.md), and longer waits take in more of the fakes: at
  * one fake per 40 deadlines the enumeration still finds every slave; at one
@@ -358,6 +387,7 @@ int main(void) {
         tcase_add_test(tc, enumerate_early_config);
         tcase_add_test(tc, enumerate_duplicate_answers);
         tcase_add_test(tc, enumerate_with_late_answers);
+        tcase_add_test(tc, foreign_answers_leave_waits_alone);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
