@@ -164,6 +164,10 @@ struct lss_master {
         /* when a step last waited for each LSS answer cs, + 1 (0: never):
          * only an answer to something asked lately can be a late one */
         uint64_t asked_at[256];
+        /* without tx confirmation: when the frames handed to the transport
+         * so far are estimated off the wire (an earlier operation's
+         * unconfirmed requests may still be queued ahead of a new step) */
+        uint64_t wire_until;
 
         /* arguments and state of the running operation */
         union {

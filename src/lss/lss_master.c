@@ -217,6 +217,8 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
         m->done = false;
         m->cancelling = false;
         m->sc.restore = false;
+        if (now < m->now) /* a caller's clock that went back: no estimate holds */
+                m->wire_until = 0;
         m->now = now;
         m->n_devices = 0;
         m->n_announced = 0;
@@ -778,6 +780,7 @@ bool lss_master_next_tx(lss_master *m, lss_frame *f) {
         *f = m->txq[m->txq_head];
         m->txq_head = (m->txq_head + 1) % 16;
         m->txq_len--;
+        m->wire_until = (m->wire_until > m->now ? m->wire_until : m->now) + lss_timing_frame_us(&m->timing, f);
         return true;
 }
 

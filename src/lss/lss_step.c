@@ -68,7 +68,10 @@ void step_start(lss_master *m) {
         for (unsigned i = 0; i < s->n_tx; i++)
                 (void) step_queue_tx(m, &s->tx[i]);
         /* everything still queued goes on the wire ahead of the answer
-         * (e.g. an unconfirmed switch sent just before) */
+         * (e.g. an unconfirmed switch sent just before): in the engine's
+         * queue, and handed out but not yet off the wire */
+        if (m->wire_until > m->now)
+                s->tx_us += m->wire_until - m->now;
         for (unsigned i = 0; i < m->txq_len; i++)
                 s->tx_us += lss_timing_frame_us(&m->timing, &m->txq[(m->txq_head + i) % 16]);
         s->sent_at = m->now;

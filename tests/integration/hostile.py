@@ -245,9 +245,10 @@ def test_many_jobs():
                         calls.append((B0, BUS_IFACE, 'Execute', 'a(sv)', select_inquire(SLAVES[i % len(SLAVES)])))
                     else:
                         calls.append((B0, BUS_IFACE, 'Execute', 'a(sv)', [[('SwitchModeGlobal', ('y', 0))]]))
+                # every job succeeds: the switches queued ahead on the wire
+                # are no answer latency (a NoResponse here was lssd's timing)
                 for r in pipelined(c, calls):
-                    expect(not isinstance(r, dbusmini.DBusError) or r.name == ERR + 'NoResponse',
-                           'job failed: %r' % r)
+                    expect(not isinstance(r, dbusmini.DBusError), 'job failed: %r' % r)
                 done += k
 
         jobs(500)  # warm up: allocator pools, sd-bus buffers
