@@ -4,10 +4,12 @@
  *
  * Contract every implementation keeps:
  *  - send() puts one frame on the bus, or returns an error having sent nothing:
- *    never drops, reorders or duplicates. Errors: -ENETDOWN (link down: fail
- *    the transaction, the transport works again once the link is up),
- *    -ENODEV (interface gone: the transport re-opens it by name later),
- *    -ETIMEDOUT (tx queue stayed full), -EINVAL (frame not sendable).
+ *    never drops, reorders or duplicates, and never blocks. Errors: -EAGAIN
+ *    (tx queue full: send the same frame again later; how long to keep
+ *    trying is the caller's choice), -ENETDOWN (link down: fail the
+ *    transaction, the transport works again once the link is up), -ENODEV
+ *    (interface gone: the transport re-opens it by name later), -EINVAL
+ *    (frame not sendable).
  *  - recv() returns 1 with one frame and its receive time, 0 when nothing is
  *    pending, <0 on error (same codes as send). Frames arrive in bus order.
  *    Error frames never come out of recv(): they update the status.

@@ -13,6 +13,7 @@
 #include <systemd/sd-event.h>
 
 #include "can/rtnl_watch.h"
+#include "can/transport.h"
 #include "config/lssd_config.h"
 #include "daemon/lssd_args.h"
 #include "daemon/lssd_auth.h"
@@ -32,6 +33,8 @@ typedef struct lssd_bus_host_ops {
         void (*boot_pass_done)(void *userdata);
         void (*removed)(void *userdata, lssd_bus *b); /* removing and idle now: free it */
         void (*idle)(void *userdata);          /* the bus went idle (stopping waits for that) */
+        /* Opens the bus's transport (tests: a fake); NULL: SocketCAN, or the simulated bus of --simulate. */
+        int (*open_transport)(void *userdata, const char *ifname, lss_transport *ret);
 } lssd_bus_host_ops;
 
 typedef struct lssd_bus_host {

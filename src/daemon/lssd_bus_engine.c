@@ -17,7 +17,8 @@
 static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata);
 
 static void bus_arm_timer(lssd_bus *b) {
-        uint64_t t = lss_master_deadline(b->engine);
+        /* a held frame stops the engine's clock until it is written */
+        uint64_t t = bus_tx_pending(b) ? UINT64_MAX : lss_master_deadline(b->engine);
         if (b->sim) {
                 uint64_t s = lssd_simbus_next_event(b->sim);
                 if (s < t)
@@ -32,58 +33,6 @@ static void bus_arm_timer(lssd_bus *b) {
                 r = sd_event_source_set_enabled(b->timer_source, SD_EVENT_ONESHOT);
         if (r < 0)
                 log_error("%s: failed to arm the timer: %s", b->ifname, strerror(-r));
-}
-
-/* Sends what the engine wants sent. A transport error ends the running
- * operation (the frames behind the failed one are dropped, never reordered). */
-static void bus_flush_tx(lssd_bus *b) {
-        lss_frame f;
-        uint64_t sent_at = 0;
-        int err = 0;
-
-        while (lss_master_next_tx(b->engine, &f)) {
-                if (err < 0)
-                        continue;
-                /* An answer may arrive before send() even returns (a slave on
-                 * another CPU, a virtual bus): the frame counts as sent when
-                 * we hand it over, or the engine would take the answer for a
-                 * stale frame. */
-                uint64_t t = bus_now(b);
-                int r = lss_transport_send(&b->transport, &f);
-                if (r < 0)
-                        err = r;
-                else {
-                        sent_at = t;
-                        lssd_heard_tx(&b->heard, &f);
-                        if (f.id == LSS_COB_MASTER && f.flags == 0) {
-                                b->echo_want = f;
-                                b->echo_want_at = t;
-                                b->echo_pending = true;
-                        }
-                }
-        }
-        /* only when something went out: on_sent() restarts the running wait */
-        if (sent_at > 0)
-                lss_master_on_sent(b->engine, sent_at);
-        if (err >= 0)
-                return;
-        uint64_t now = bus_now(b);
-
-        char why[128];
-        enum lss_status st = b->bus_state == LSS_BUS_OFF ? LSS_E_BUS_OFF : LSS_E_BUS_DOWN;
-        if (err == -ENETDOWN)
-                snprintf(why, sizeof(why), "%s is down", b->ifname);
-        else if (err == -ENODEV || err == -ENXIO)
-                snprintf(why, sizeof(why), "%s does not exist", b->ifname);
-        else if (err == -ETIMEDOUT)
-                snprintf(why, sizeof(why), "%s: transmit queue stayed full (is any other node acknowledging?)",
-                         b->ifname);
-        else
-                snprintf(why, sizeof(why), "%s: send failed: %s", b->ifname, strerror(-err));
-        log_warning("%s", why);
-        lss_master_on_bus_error(b->engine, st, why, now);
-        while (lss_master_next_tx(b->engine, &f))
-                ;
 }
 
 static void bus_job_end(lssd_bus *b) {
@@ -156,6 +105,9 @@ void bus_process(lssd_bus *b) {
         b->processing = true;
         for (;;) {
                 bus_flush_tx(b);
+                /* the tx queue is full: nothing moves until the frame is written */
+                if (bus_tx_pending(b))
+                        break;
                 /* SetBitrate: the engine is silent and waits for the host interface */
                 if (b->engine_running && lss_master_retune_wanted(b->engine, NULL, NULL)) {
                         if (bus_retune(b))
@@ -266,6 +218,8 @@ void bus_update_io(lssd_bus *b, bool force) {
                 return;
         }
         b->io_fd = fd;
+        if (bus_tx_pending(b))
+                (void) sd_event_source_set_enabled(b->io_source, SD_EVENT_OFF);
 }
 
 static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata) {

@@ -67,6 +67,15 @@ void bus_update_timing(lssd_bus *b) {
 static int bus_open_transport(lssd_bus *b) {
         int r;
 
+        if (b->host.ops->open_transport) {
+                lss_transport_status st;
+                r = b->host.ops->open_transport(b->host.userdata, b->ifname, &b->transport);
+                if (r < 0)
+                        return r;
+                (void) lss_transport_status_get(&b->transport, &st);
+                b->link = st.link;
+                return 0;
+        }
         if (b->host.args->simulate) {
                 r = lssd_simbus_new(b->config->bitrate, &b->sim);
                 if (r < 0)
@@ -155,6 +164,9 @@ int lssd_bus_new(const lssd_bus_host *host, const lssd_bus_config *config, lssd_
         if (r < 0)
                 goto fail;
         (void) sd_event_source_set_enabled(b->timer_source, SD_EVENT_OFF);
+        r = bus_tx_init(b);
+        if (r < 0)
+                goto fail;
         bus_update_io(b, true);
 
         if (host->dbus) {
@@ -258,6 +270,7 @@ lssd_bus *lssd_bus_free(lssd_bus *b) {
         b->remove_source = sd_event_source_disable_unref(b->remove_source);
         b->io_source = sd_event_source_disable_unref(b->io_source);
         b->timer_source = sd_event_source_disable_unref(b->timer_source);
+        b->tx_retry_source = sd_event_source_disable_unref(b->tx_retry_source);
         lss_transport_close(&b->transport);
         b->port = NULL;
         b->sim = NULL;

@@ -14,6 +14,9 @@
 #define RX_BATCH 64u
 /* how much earlier than its write an echo may read (clock conversion error), see bus_on_echo() */
 #define ECHO_CLOCK_SLACK_US 1000u
+/* How long a frame the tx queue refuses is tried again before the running
+ * operation fails (a frame takes 0.1..1 ms on the wire). */
+#define LSSD_TX_TIMEOUT_MS 100u
 /* Link events this long after our own retune are taken for it. */
 #define RETUNE_LINK_GRACE_US (5u * 1000000u)
 
@@ -50,6 +53,11 @@ struct lssd_bus {
         lss_frame echo_want;             /* last LSS request written: its echo confirms it is on the wire */
         uint64_t echo_want_at;           /* when it was written */
         bool echo_pending;
+        lss_frame tx_frame;              /* handed out by the engine, refused by a full tx queue */
+        bool tx_held;
+        uint64_t tx_deadline;            /* 0 until tx_frame is first refused */
+        uint64_t tx_sent_at;             /* last write of the frames handed out, for on_sent() */
+        sd_event_source *tx_retry_source;
 
         lssd_job_queue queue;
         lssd_job *job;                   /* running */
@@ -84,7 +92,12 @@ void bus_set_progress(lssd_bus *b, double p);
 void bus_on_engine_progress(void *userdata, double p);
 void bus_on_engine_found(void *userdata, const lss_device *d);
 
-/* lssd_bus_engine.c: frames in and out, the timer, the job at the head */
+/* lssd_bus_tx.c: frames out, held while the tx queue is full */
+int bus_tx_init(lssd_bus *b);
+void bus_flush_tx(lssd_bus *b);
+bool bus_tx_pending(const lssd_bus *b);
+
+/* lssd_bus_engine.c: frames in, the timer, the job at the head */
 void bus_process(lssd_bus *b);
 void bus_update_io(lssd_bus *b, bool force);
 int bus_on_timer(sd_event_source *s, uint64_t usec, void *userdata);
