@@ -26,8 +26,7 @@ struct socketcan_port {
         int ifindex;            /* 0 when gone */
         lss_link_state state;
         const can_sys *sys;
-        void (*on_link_state)(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata);
-        void *userdata;
+        lss_transport_hooks hooks;
 
         lss_bus_state bus;
         uint32_t events;
@@ -276,8 +275,8 @@ static void set_state(socketcan_port *p, lss_link_state s) {
                 p->bus = LSS_BUS_ERROR_ACTIVE;
                 p->events |= LSS_BUS_EVENT_STATE_CHANGED;
         }
-        if (p->on_link_state)
-                p->on_link_state(p, old, s, p->userdata);
+        if (p->hooks.link_changed)
+                p->hooks.link_changed(p->hooks.userdata, old, s);
 }
 
 static void go_gone(socketcan_port *p) {
@@ -431,8 +430,7 @@ int socketcan_port_open(const char *ifname, const socketcan_config *cfg, socketc
         p->events = 0; /* the caller reads the initial state; nothing happened yet */
         /* Set only now: nobody is listening to the initial open. */
         if (cfg) {
-                p->on_link_state = cfg->on_link_state;
-                p->userdata = cfg->userdata;
+                p->hooks = cfg->hooks;
         }
         *ret = p;
         return 0;
@@ -648,43 +646,6 @@ int socketcan_port_ifindex(const socketcan_port *p) {
         return p->ifindex;
 }
 
-/* ---- as a transport ---- */
-
-static int tp_send(void *impl, const lss_frame *f) {
-        return socketcan_port_send(impl, f);
-}
-
-static int tp_recv(void *impl, lss_frame *f, uint64_t *rx_us) {
-        return socketcan_port_recv(impl, f, rx_us);
-}
-
-static int tp_get_fd(void *impl) {
-        return socketcan_port_fd(impl);
-}
-
-static uint64_t tp_now(void *impl) {
-        return socketcan_port_now(impl);
-}
-
-static int tp_status(void *impl, lss_transport_status *st) {
-        socketcan_port_status(impl, st);
-        return 0;
-}
-
-static void tp_close(void *impl) {
-        socketcan_port_free(impl);
-}
-
-static const lss_transport_ops socketcan_transport_ops = {
-        .send = tp_send,
-        .recv = tp_recv,
-        .get_fd = tp_get_fd,
-        .now = tp_now,
-        .status = tp_status,
-        .close = tp_close,
-};
-
-void socketcan_port_transport(socketcan_port *p, lss_transport *ret) {
-        ret->ops = &socketcan_transport_ops;
-        ret->impl = p;
+const can_sys *socketcan_port_sys(const socketcan_port *p) {
+        return p->sys;
 }

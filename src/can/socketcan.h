@@ -22,12 +22,11 @@
 typedef struct socketcan_port socketcan_port;
 
 typedef struct socketcan_config {
-        /* Called on every link state change. When the new state is "gone" the
-         * old fd is still open during the call (remove it from the event loop
-         * here), and is closed right after. Must not call back into the port
-         * except for getters. */
-        void (*on_link_state)(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata);
-        void *userdata;
+        /* link_changed: on every link state change. When the new state is
+         * "gone" the old fd is still open during the call (remove it from the
+         * event loop here), and is closed right after. Must not call back
+         * into the port except for getters. */
+        lss_transport_hooks hooks;
         /* System calls; NULL = the real ones. */
         const can_sys *sys;
 } socketcan_config;
@@ -74,8 +73,12 @@ bool socketcan_port_echoes(const socketcan_port *p);
 const char *socketcan_port_ifname(const socketcan_port *p);
 int socketcan_port_ifindex(const socketcan_port *p); /* 0 when gone */
 
-/* The port as a transport; the transport's close() frees the port. */
+/* The port as a transport (socketcan_transport.c); the transport's close()
+ * frees the port. Its retune() sets the bit rate over rtnetlink (through
+ * the port's can_sys) and re-opens the socket. */
 void socketcan_port_transport(socketcan_port *p, lss_transport *ret);
+/* The system calls the port was opened with. */
+const can_sys *socketcan_port_sys(const socketcan_port *p);
 
 /* ---- pure helpers, exported for tests ---- */
 

@@ -19,11 +19,9 @@ static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata);
 static void bus_arm_timer(lssd_bus *b) {
         /* a held frame stops the engine's clock until it is written */
         uint64_t t = bus_tx_pending(b) ? UINT64_MAX : lss_master_deadline(b->engine);
-        if (b->sim) {
-                uint64_t s = lssd_simbus_next_event(b->sim);
-                if (s < t)
-                        t = s;
-        }
+        uint64_t next = lss_transport_next_event(&b->transport); /* a transport without an fd */
+        if (next < t)
+                t = next;
         if (t == UINT64_MAX) {
                 (void) sd_event_source_set_enabled(b->timer_source, SD_EVENT_OFF);
                 return;
@@ -108,12 +106,6 @@ void bus_process(lssd_bus *b) {
                 /* the tx queue is full: nothing moves until the frame is written */
                 if (bus_tx_pending(b))
                         break;
-                /* SetBitrate: the engine is silent and waits for the host interface */
-                if (b->engine_running && lss_master_retune_wanted(b->engine, NULL, NULL)) {
-                        if (bus_retune(b))
-                                bus_update_io(b, true);
-                        continue;
-                }
                 if (b->engine_running && lss_master_done(b->engine)) {
                         b->engine_running = false;
                         bus_job_continue(b, lss_master_result(b->engine));
@@ -203,7 +195,7 @@ static void bus_check_status(lssd_bus *b) {
 void bus_update_io(lssd_bus *b, bool force) {
         int fd = lss_transport_get_fd(&b->transport);
         /* a new socket may echo or not; the engine applies it from its next step */
-        lss_master_set_tx_confirm(b->engine, b->port && socketcan_port_echoes(b->port));
+        lss_master_set_tx_confirm(b->engine, lss_transport_echoes(&b->transport));
         if (fd != b->io_fd)
                 b->echo_pending = false;
         if (fd == b->io_fd && !force)
@@ -234,7 +226,7 @@ static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata) {
 int bus_on_timer(sd_event_source *s, uint64_t usec, void *userdata) {
         lssd_bus *b = userdata;
         if (b->io_fd < 0)
-                bus_poll_rx(b); /* simulated bus: frames are picked up on time */
+                bus_poll_rx(b); /* no fd (simulated bus): frames are picked up on time */
         lss_master_on_time(b->engine, bus_now(b));
         bus_process(b);
         return 0;

@@ -3,12 +3,10 @@
  * Nothing but those files includes this header. */
 #pragma once
 
-#include "can/socketcan.h"
 #include "can/transport.h"
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_heard.h"
 #include "daemon/lssd_holder.h"
-#include "daemon/lssd_simbus.h"
 
 /* Frames read per wake-up before the other buses get their turn. */
 #define RX_BATCH 64u
@@ -35,9 +33,7 @@ struct lssd_bus {
         char *path;
         lssd_bus_config *config;         /* own copy: a bus being removed outlives its configuration */
 
-        lss_transport transport;
-        socketcan_port *port;            /* behind transport, NULL when simulated */
-        lssd_simbus *sim;                /* behind transport when simulated */
+        lss_transport transport;         /* SocketCAN, the simulated bus, a test's fake: the host's choice */
         sd_event_source *io_source;
         int io_fd;
         sd_event_source *timer_source;
@@ -46,7 +42,8 @@ struct lssd_bus {
         uint64_t rx_dropped;
         uint32_t link_bitrate;           /* from rtnetlink for real controllers, 0 otherwise */
         bool link_virtual;               /* vcan/vxcan: frames take no time on the "wire" */
-        bool link_changed;               /* socketcan reported a change: handle it outside the callback */
+        bool link_changed;               /* the transport reported a change: handle it outside the callback */
+        sd_event_source *retune_source;  /* SetBitrate: the engine waits for the host interface */
 
         lss_master *engine;
         bool engine_running;             /* we started an operation and did not collect it yet */
@@ -110,8 +107,8 @@ void bus_queue_boot_pass(lssd_bus *b);
 void bus_on_holder_gone(lssd_holder *h, void *userdata);
 
 /* lssd_bus_link.c: the host interface */
-bool bus_retune(lssd_bus *b);
-void bus_on_link_state(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata);
+void bus_on_retune_wanted(void *userdata);
+void bus_on_link_state(void *userdata, lss_link_state old_state, lss_link_state new_state);
 
 /* lssd_bus_views.c: what the registry and the job runners see */
 extern const lssd_devices_ops bus_devices_ops;

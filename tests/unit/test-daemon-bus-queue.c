@@ -10,9 +10,18 @@
 #include <systemd/sd-event.h>
 
 
+#include "daemon/lssd_transport_open.h"
+
 #include "daemon-bus-fixture.h"
 
-static const lssd_bus_host_ops host_ops = FAKE_HOST_OPS(NULL);
+/* the simulated bus of --simulate, no slaves */
+static int open_simulated(void *userdata, const char *ifname, uint32_t bitrate, const lss_transport_hooks *hooks,
+                          lss_transport *ret) {
+        const lssd_args args = { .simulate = true };
+        return lssd_transport_open(&args, ifname, bitrate, hooks, ret);
+}
+
+static const lssd_bus_host_ops host_ops = FAKE_HOST_OPS(open_simulated);
 
 static void up(fixture *f) {
         fixture_up(f, "sim0", true, &host_ops);

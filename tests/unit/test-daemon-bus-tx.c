@@ -57,7 +57,8 @@ static const lss_transport_ops tp_ops = {
         .now = tp_now,
 };
 
-static int host_open_transport(void *userdata, const char *ifname, lss_transport *ret) {
+static int host_open_transport(void *userdata, const char *ifname, uint32_t bitrate, const lss_transport_hooks *hooks,
+                               lss_transport *ret) {
         *ret = (lss_transport) { .ops = &tp_ops, .impl = &T };
         return 0;
 }

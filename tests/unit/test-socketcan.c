@@ -309,24 +309,27 @@ typedef struct state_log {
         int fd_during[16];
         size_t closes_before[16];
         size_t n;
+        socketcan_port *p;
 } state_log;
 
-static void on_state(socketcan_port *p, lss_link_state o, lss_link_state n, void *userdata) {
+static void on_state(void *userdata, lss_link_state o, lss_link_state n) {
         state_log *l = userdata;
         ck_assert_uint_lt(l->n, 16);
         l->old_state[l->n] = o;
         l->new_state[l->n] = n;
-        l->fd_during[l->n] = socketcan_port_fd(p);
+        l->fd_during[l->n] = socketcan_port_fd(l->p);
         l->closes_before[l->n] = count_calls(C_CLOSE);
         l->n++;
 }
 
 static socketcan_port *open_fake(state_log *log) {
-        socketcan_config cfg = { .sys = &fake_sys, .on_link_state = log ? on_state : NULL, .userdata = log };
+        socketcan_config cfg = { .sys = &fake_sys, .hooks = { .link_changed = log ? on_state : NULL, .userdata = log } };
         socketcan_port *p = NULL;
 
         ck_assert_int_eq(socketcan_port_open("can0", &cfg, &p), 0);
         ck_assert_ptr_nonnull(p);
+        if (log)
+                log->p = p;
         return p;
 }
 
@@ -1284,6 +1287,21 @@ START_TEST(as_transport) {
         ck_assert_int_eq(lss_transport_recv(&t, &f, &rx), 0);
         ck_assert_int_eq(lss_transport_status_get(&t, &st), 0);
         ck_assert_uint_eq(st.events, LSS_BUS_EVENT_NO_ACK);
+        /* link state, echo and link events through the seam */
+        ck_assert_str_eq(t.ops->kind, "SocketCAN");
+        ck_assert_int_eq(lss_transport_link(&t), LSS_LINK_UP);
+        ck_assert(lss_transport_echoes(&t));
+        ck_assert_uint_eq(lss_transport_next_event(&t), UINT64_MAX);
+        lss_link_event ev = { .ifindex = 99, .ifname = "can5", .present = true, .flags = IFF_UP | IFF_RUNNING };
+        ck_assert_int_eq(lss_transport_link_event(&t, &ev), 0); /* another interface */
+        ev = (lss_link_event) { .ifindex = 7, .ifname = "can0", .present = true, .flags = IFF_UP };
+        ck_assert_int_eq(lss_transport_link_event(&t, &ev), 1); /* not running: down */
+        ck_assert_int_eq(lss_transport_link(&t), LSS_LINK_DOWN);
+        ev.present = false;
+        ck_assert_int_eq(lss_transport_link_event(&t, &ev), 1);
+        ck_assert_int_eq(lss_transport_link(&t), LSS_LINK_GONE);
+        ck_assert(!lss_transport_echoes(&t));
+        ck_assert_int_eq(lss_transport_get_fd(&t), -1);
         lss_transport_close(&t); /* frees the port: valgrind checks */
         ck_assert_ptr_null(t.ops);
         ck_assert_int_eq(F.n_open_fds, 0);
@@ -1316,6 +1334,13 @@ START_TEST(transport_defaults_and_names) {
         ck_assert_int_eq(lss_transport_send(&t, &f), 0);
         ck_assert_int_eq(sent, 1);
         ck_assert_uint_eq(lss_transport_now(&t), 42);
+        /* optional ops: always up, no echo, no wake-up, no links, nothing to retune */
+        ck_assert_int_eq(lss_transport_link(&t), LSS_LINK_UP);
+        ck_assert(!lss_transport_echoes(&t));
+        ck_assert_uint_eq(lss_transport_next_event(&t), UINT64_MAX);
+        lss_link_event ev = { .ifindex = 1, .ifname = "can0", .present = true };
+        ck_assert_int_eq(lss_transport_link_event(&t, &ev), -EOPNOTSUPP);
+        ck_assert_int_eq(lss_transport_retune(&t, 250000), -EOPNOTSUPP);
         lss_transport_close(&t);
         ck_assert_ptr_null(t.impl);
 
