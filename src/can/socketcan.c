@@ -25,10 +25,8 @@ struct socketcan_port {
         int fd;                 /* -1 when gone */
         int ifindex;            /* 0 when gone */
         lss_link_state state;
-        unsigned tx_timeout_ms;
         const can_sys *sys;
-        void (*on_link_state)(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata);
-        void *userdata;
+        lss_transport_hooks hooks;
 
         lss_bus_state bus;
         uint32_t events;
@@ -277,8 +275,8 @@ static void set_state(socketcan_port *p, lss_link_state s) {
                 p->bus = LSS_BUS_ERROR_ACTIVE;
                 p->events |= LSS_BUS_EVENT_STATE_CHANGED;
         }
-        if (p->on_link_state)
-                p->on_link_state(p, old, s, p->userdata);
+        if (p->hooks.link_changed)
+                p->hooks.link_changed(p->hooks.userdata, old, s);
 }
 
 static void go_gone(socketcan_port *p) {
@@ -328,8 +326,8 @@ static int open_socket(socketcan_port *p) {
         if (idx == 0)
                 return -ENODEV;
 
-        /* Non-blocking: the daemon's event loop must never sleep in read(),
-         * and send() waits for tx room only as long as it chooses to. */
+        /* Non-blocking: the daemon's event loop must never sleep in read()
+         * or write(); a full tx queue is the caller's to wait out. */
         fd = sys->socket(sys->userdata, PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
         if (fd < 0)
                 return fd;
@@ -423,7 +421,6 @@ int socketcan_port_open(const char *ifname, const socketcan_config *cfg, socketc
         p->fd = -1;
         p->state = LSS_LINK_GONE;
         p->sys = cfg && cfg->sys ? cfg->sys : can_sys_default();
-        p->tx_timeout_ms = cfg && cfg->tx_timeout_ms ? cfg->tx_timeout_ms : SOCKETCAN_TX_TIMEOUT_MS_DEFAULT;
 
         r = open_socket(p);
         if (r < 0 && r != -ENODEV) {
@@ -433,8 +430,7 @@ int socketcan_port_open(const char *ifname, const socketcan_config *cfg, socketc
         p->events = 0; /* the caller reads the initial state; nothing happened yet */
         /* Set only now: nobody is listening to the initial open. */
         if (cfg) {
-                p->on_link_state = cfg->on_link_state;
-                p->userdata = cfg->userdata;
+                p->hooks = cfg->hooks;
         }
         *ret = p;
         return 0;
@@ -500,30 +496,11 @@ int socketcan_port_link_event(socketcan_port *p, int ifindex, const char *ifname
 
 /* ---- send ---- */
 
-static int wait_writable(socketcan_port *p, uint64_t deadline, bool pause) {
-        uint64_t now = socketcan_port_now(p);
-        struct pollfd pfd = { .fd = p->fd, .events = POLLOUT };
-        int r;
-
-        if (now >= deadline)
-                return -ETIMEDOUT;
-        if (pause) {
-                /* POLLOUT reflects room in the socket's send buffer, not in the
-                 * device queue that said ENOBUFS: it is often already set.
-                 * Pause ~1 ms (a frame takes 0.1..1 ms on the wire) instead of spinning. */
-                r = p->sys->poll(p->sys->userdata, NULL, 0, 1);
-                return r == -EINTR ? 0 : r < 0 ? r : 0;
-        }
-        r = p->sys->poll(p->sys->userdata, &pfd, 1, (int) us_to_ms_up(deadline - now));
-        if (r == -EINTR)
-                return 0;
-        return r < 0 ? r : 0;
-}
-
+/* Never waits: a full tx queue (ENOBUFS from the device queue, EAGAIN from
+ * the socket buffer) is -EAGAIN with nothing sent, and the caller writes the
+ * same frame again later from its event loop. */
 int socketcan_port_send(socketcan_port *p, const lss_frame *f) {
         struct can_frame cf;
-        uint64_t deadline = 0;
-        bool pause = false;
         int r;
 
         r = socketcan_frame_to_can(f, &cf);
@@ -546,19 +523,9 @@ int socketcan_port_send(socketcan_port *p, const lss_frame *f) {
                         return -EIO; /* CAN_RAW takes a frame whole or not at all */
                 if (n == -EINTR)
                         continue; /* nothing was queued */
-                if (n != -ENOBUFS && n != -EAGAIN)
-                        return port_fail(p, (int) n);
-
-                /* Tx queue (ENOBUFS) or socket buffer (EAGAIN) full: wait for
-                 * room and write the same frame again, until the deadline. */
-                if (deadline == 0)
-                        deadline = socketcan_port_now(p) + (uint64_t) p->tx_timeout_ms * 1000u;
-                r = wait_writable(p, deadline, pause);
-                if (r < 0)
-                        return r;
-                /* Alternate: wait for POLLOUT, then (if still full) pause,
-                 * so that a POLLOUT that is always set cannot make a busy loop. */
-                pause = !pause;
+                if (n == -ENOBUFS || n == -EAGAIN)
+                        return -EAGAIN;
+                return port_fail(p, (int) n);
         }
 }
 
@@ -679,43 +646,6 @@ int socketcan_port_ifindex(const socketcan_port *p) {
         return p->ifindex;
 }
 
-/* ---- as a transport ---- */
-
-static int tp_send(void *impl, const lss_frame *f) {
-        return socketcan_port_send(impl, f);
-}
-
-static int tp_recv(void *impl, lss_frame *f, uint64_t *rx_us) {
-        return socketcan_port_recv(impl, f, rx_us);
-}
-
-static int tp_get_fd(void *impl) {
-        return socketcan_port_fd(impl);
-}
-
-static uint64_t tp_now(void *impl) {
-        return socketcan_port_now(impl);
-}
-
-static int tp_status(void *impl, lss_transport_status *st) {
-        socketcan_port_status(impl, st);
-        return 0;
-}
-
-static void tp_close(void *impl) {
-        socketcan_port_free(impl);
-}
-
-static const lss_transport_ops socketcan_transport_ops = {
-        .send = tp_send,
-        .recv = tp_recv,
-        .get_fd = tp_get_fd,
-        .now = tp_now,
-        .status = tp_status,
-        .close = tp_close,
-};
-
-void socketcan_port_transport(socketcan_port *p, lss_transport *ret) {
-        ret->ops = &socketcan_transport_ops;
-        ret->impl = p;
+const can_sys *socketcan_port_sys(const socketcan_port *p) {
+        return p->sys;
 }

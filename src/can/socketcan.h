@@ -19,19 +19,14 @@
 #include "can/transport.h"
 #include "lss/lss_proto.h"
 
-#define SOCKETCAN_TX_TIMEOUT_MS_DEFAULT 100u
-
 typedef struct socketcan_port socketcan_port;
 
 typedef struct socketcan_config {
-        /* How long send() waits for room in a full tx queue; 0 = default. */
-        unsigned tx_timeout_ms;
-        /* Called on every link state change. When the new state is "gone" the
-         * old fd is still open during the call (remove it from the event loop
-         * here), and is closed right after. Must not call back into the port
-         * except for getters. */
-        void (*on_link_state)(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata);
-        void *userdata;
+        /* link_changed: on every link state change. When the new state is
+         * "gone" the old fd is still open during the call (remove it from the
+         * event loop here), and is closed right after. Must not call back
+         * into the port except for getters. */
+        lss_transport_hooks hooks;
         /* System calls; NULL = the real ones. */
         const can_sys *sys;
 } socketcan_config;
@@ -58,9 +53,9 @@ int socketcan_port_reopen(socketcan_port *p);
  * Returns 1 if the port's state or socket changed, 0 if not, <0 if a re-open failed. */
 int socketcan_port_link_event(socketcan_port *p, int ifindex, const char *ifname, bool present, unsigned flags);
 
-/* One classic CAN frame. 0, or -ENETDOWN / -ENODEV / -ETIMEDOUT (tx queue
- * still full after tx_timeout_ms) / -EINVAL (frame not classic CAN) / other.
- * Blocks at most tx_timeout_ms while the tx queue is full. */
+/* One classic CAN frame, never blocking. 0, or -EAGAIN (tx queue full:
+ * nothing sent, write it again later) / -ENETDOWN / -ENODEV / -EINVAL
+ * (frame not classic CAN) / other. */
 int socketcan_port_send(socketcan_port *p, const lss_frame *f);
 /* 1: a frame and its CLOCK_MONOTONIC receive time in µs; 0: nothing pending;
  * <0: -ENETDOWN, -ENODEV, or another socket error. Error frames and invalid
@@ -78,8 +73,12 @@ bool socketcan_port_echoes(const socketcan_port *p);
 const char *socketcan_port_ifname(const socketcan_port *p);
 int socketcan_port_ifindex(const socketcan_port *p); /* 0 when gone */
 
-/* The port as a transport; the transport's close() frees the port. */
+/* The port as a transport (socketcan_transport.c); the transport's close()
+ * frees the port. Its retune() sets the bit rate over rtnetlink (through
+ * the port's can_sys) and re-opens the socket. */
 void socketcan_port_transport(socketcan_port *p, lss_transport *ret);
+/* The system calls the port was opened with. */
+const can_sys *socketcan_port_sys(const socketcan_port *p);
 
 /* ---- pure helpers, exported for tests ---- */
 

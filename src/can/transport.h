@@ -4,10 +4,12 @@
  *
  * Contract every implementation keeps:
  *  - send() puts one frame on the bus, or returns an error having sent nothing:
- *    never drops, reorders or duplicates. Errors: -ENETDOWN (link down: fail
- *    the transaction, the transport works again once the link is up),
- *    -ENODEV (interface gone: the transport re-opens it by name later),
- *    -ETIMEDOUT (tx queue stayed full), -EINVAL (frame not sendable).
+ *    never drops, reorders or duplicates, and never blocks. Errors: -EAGAIN
+ *    (tx queue full: send the same frame again later; how long to keep
+ *    trying is the caller's choice), -ENETDOWN (link down: fail the
+ *    transaction, the transport works again once the link is up), -ENODEV
+ *    (interface gone: the transport re-opens it by name later), -EINVAL
+ *    (frame not sendable).
  *  - recv() returns 1 with one frame and its receive time, 0 when nothing is
  *    pending, <0 on error (same codes as send). Frames arrive in bus order.
  *    Error frames never come out of recv(): they update the status.
@@ -26,10 +28,24 @@
  *  - status() fills a snapshot and clears its `events`. A step of the engine
  *    that saw rx_dropped change lost frames: its result is invalid.
  *    status may be NULL in an implementation that never loses frames.
+ *  - link() is the link state now (NULL: always up); an implementation
+ *    whose link can change tells its user through the hooks it was opened
+ *    with, the fd still open during the call when the new state is "gone".
+ *  - echoes(): recv() hands back our sent frames (NULL: never).
+ *  - next_event(): an implementation without an fd says when recv() has
+ *    something next (same clock as now(); UINT64_MAX: nothing; NULL: never).
+ *  - link_event() takes every rtnetlink link event (any interface: the
+ *    implementation picks its own): 1 when its state or fd changed, 0 when
+ *    not, <0 when a re-open failed; NULL: the links of the host do not
+ *    matter to it.
+ *  - retune() puts the host's controller on another bit rate (SetBitrate):
+ *    0 done (the fd may have changed), -EOPNOTSUPP nothing to retune, other
+ *    <0 failed. Synchronous (rtnetlink on a real controller). NULL: none.
  *  - close() frees the implementation.
  */
 #pragma once
 
+#include <errno.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <string.h>
@@ -74,12 +90,32 @@ typedef struct lss_transport_status {
         bool tx_echo;           /* recv() returns our sent frames flagged LSS_FRAME_ECHO */
 } lss_transport_status;
 
+/* One rtnetlink link event, as link_event() takes it. */
+typedef struct lss_link_event {
+        int ifindex;
+        const char *ifname;     /* "" if the message had none */
+        bool present;           /* false for RTM_DELLINK */
+        unsigned flags;         /* IFF_* */
+} lss_link_event;
+
+/* What an implementation tells its user. */
+typedef struct lss_transport_hooks {
+        void (*link_changed)(void *userdata, lss_link_state old_state, lss_link_state new_state);
+        void *userdata;
+} lss_transport_hooks;
+
 typedef struct lss_transport_ops {
+        const char *kind;       /* for people: "SocketCAN", "simulated" */
         int (*send)(void *impl, const lss_frame *f);
         int (*recv)(void *impl, lss_frame *f, uint64_t *rx_us);
         int (*get_fd)(void *impl);
         uint64_t (*now)(void *impl);
         int (*status)(void *impl, lss_transport_status *st); /* optional */
+        lss_link_state (*link)(void *impl);                    /* optional */
+        bool (*echoes)(void *impl);                            /* optional */
+        uint64_t (*next_event)(void *impl);                    /* optional */
+        int (*link_event)(void *impl, const lss_link_event *ev); /* optional */
+        int (*retune)(void *impl, uint32_t bitrate);           /* optional */
         void (*close)(void *impl);
 } lss_transport_ops;
 
@@ -110,6 +146,27 @@ static inline int lss_transport_status_get(lss_transport *t, lss_transport_statu
                 return t->ops->status(t->impl, st);
         memset(st, 0, sizeof(*st));
         return 0;
+}
+
+static inline lss_link_state lss_transport_link(lss_transport *t) {
+        return t->ops->link ? t->ops->link(t->impl) : LSS_LINK_UP;
+}
+
+static inline bool lss_transport_echoes(lss_transport *t) {
+        return t->ops->echoes && t->ops->echoes(t->impl);
+}
+
+static inline uint64_t lss_transport_next_event(lss_transport *t) {
+        return t->ops->next_event ? t->ops->next_event(t->impl) : UINT64_MAX;
+}
+
+/* -EOPNOTSUPP when link events do not matter to the implementation. */
+static inline int lss_transport_link_event(lss_transport *t, const lss_link_event *ev) {
+        return t->ops->link_event ? t->ops->link_event(t->impl, ev) : -EOPNOTSUPP;
+}
+
+static inline int lss_transport_retune(lss_transport *t, uint32_t bitrate) {
+        return t->ops->retune ? t->ops->retune(t->impl, bitrate) : -EOPNOTSUPP;
 }
 
 /* Frees the implementation; safe on a closed (zeroed) transport. */

@@ -14,7 +14,7 @@
 #include "daemon/lssd_errors.h"
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_ready.h"
-#include "daemon/lssd_simbus.h"
+#include "simbus/simbus.h"
 
 static void help(void) {
         printf("lssd [OPTIONS...]\n\n"
@@ -130,7 +130,7 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                         break;
                 case ARG_SIM_SLAVE: {
                         lssd_sim_slave s;
-                        if (lssd_sim_slave_parse(optarg, s.ifname, &s.id, &s.node_id) < 0) {
+                        if (simbus_slave_parse(optarg, s.ifname, &s.id, &s.node_id) < 0) {
                                 log_error("Invalid --sim-slave '%s': IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID]",
                                           optarg);
                                 return -EINVAL;

@@ -13,6 +13,7 @@
 #include <systemd/sd-event.h>
 
 #include "can/rtnl_watch.h"
+#include "can/transport.h"
 #include "config/lssd_config.h"
 #include "daemon/lssd_args.h"
 #include "daemon/lssd_auth.h"
@@ -32,6 +33,11 @@ typedef struct lssd_bus_host_ops {
         void (*boot_pass_done)(void *userdata);
         void (*removed)(void *userdata, lssd_bus *b); /* removing and idle now: free it */
         void (*idle)(void *userdata);          /* the bus went idle (stopping waits for that) */
+        /* Opens the bus's transport (lssd_transport_open(); tests: a fake):
+         * `hooks` tell the bus about its link. A missing interface is no
+         * error; 1: the log says already why the link is gone. */
+        int (*open_transport)(void *userdata, const char *ifname, uint32_t bitrate, const lss_transport_hooks *hooks,
+                              lss_transport *ret);
 } lssd_bus_host_ops;
 
 typedef struct lssd_bus_host {

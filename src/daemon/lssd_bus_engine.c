@@ -17,12 +17,11 @@
 static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata);
 
 static void bus_arm_timer(lssd_bus *b) {
-        uint64_t t = lss_master_deadline(b->engine);
-        if (b->sim) {
-                uint64_t s = lssd_simbus_next_event(b->sim);
-                if (s < t)
-                        t = s;
-        }
+        /* a held frame stops the engine's clock until it is written */
+        uint64_t t = bus_tx_pending(b) ? UINT64_MAX : lss_master_deadline(b->engine);
+        uint64_t next = lss_transport_next_event(&b->transport); /* a transport without an fd */
+        if (next < t)
+                t = next;
         if (t == UINT64_MAX) {
                 (void) sd_event_source_set_enabled(b->timer_source, SD_EVENT_OFF);
                 return;
@@ -32,58 +31,6 @@ static void bus_arm_timer(lssd_bus *b) {
                 r = sd_event_source_set_enabled(b->timer_source, SD_EVENT_ONESHOT);
         if (r < 0)
                 log_error("%s: failed to arm the timer: %s", b->ifname, strerror(-r));
-}
-
-/* Sends what the engine wants sent. A transport error ends the running
- * operation (the frames behind the failed one are dropped, never reordered). */
-static void bus_flush_tx(lssd_bus *b) {
-        lss_frame f;
-        uint64_t sent_at = 0;
-        int err = 0;
-
-        while (lss_master_next_tx(b->engine, &f)) {
-                if (err < 0)
-                        continue;
-                /* An answer may arrive before send() even returns (a slave on
-                 * another CPU, a virtual bus): the frame counts as sent when
-                 * we hand it over, or the engine would take the answer for a
-                 * stale frame. */
-                uint64_t t = bus_now(b);
-                int r = lss_transport_send(&b->transport, &f);
-                if (r < 0)
-                        err = r;
-                else {
-                        sent_at = t;
-                        lssd_heard_tx(&b->heard, &f);
-                        if (f.id == LSS_COB_MASTER && f.flags == 0) {
-                                b->echo_want = f;
-                                b->echo_want_at = t;
-                                b->echo_pending = true;
-                        }
-                }
-        }
-        /* only when something went out: on_sent() restarts the running wait */
-        if (sent_at > 0)
-                lss_master_on_sent(b->engine, sent_at);
-        if (err >= 0)
-                return;
-        uint64_t now = bus_now(b);
-
-        char why[128];
-        enum lss_status st = b->bus_state == LSS_BUS_OFF ? LSS_E_BUS_OFF : LSS_E_BUS_DOWN;
-        if (err == -ENETDOWN)
-                snprintf(why, sizeof(why), "%s is down", b->ifname);
-        else if (err == -ENODEV || err == -ENXIO)
-                snprintf(why, sizeof(why), "%s does not exist", b->ifname);
-        else if (err == -ETIMEDOUT)
-                snprintf(why, sizeof(why), "%s: transmit queue stayed full (is any other node acknowledging?)",
-                         b->ifname);
-        else
-                snprintf(why, sizeof(why), "%s: send failed: %s", b->ifname, strerror(-err));
-        log_warning("%s", why);
-        lss_master_on_bus_error(b->engine, st, why, now);
-        while (lss_master_next_tx(b->engine, &f))
-                ;
 }
 
 static void bus_job_end(lssd_bus *b) {
@@ -156,12 +103,9 @@ void bus_process(lssd_bus *b) {
         b->processing = true;
         for (;;) {
                 bus_flush_tx(b);
-                /* SetBitrate: the engine is silent and waits for the host interface */
-                if (b->engine_running && lss_master_retune_wanted(b->engine, NULL, NULL)) {
-                        if (bus_retune(b))
-                                bus_update_io(b, true);
-                        continue;
-                }
+                /* the tx queue is full: nothing moves until the frame is written */
+                if (bus_tx_pending(b))
+                        break;
                 if (b->engine_running && lss_master_done(b->engine)) {
                         b->engine_running = false;
                         bus_job_continue(b, lss_master_result(b->engine));
@@ -251,7 +195,7 @@ static void bus_check_status(lssd_bus *b) {
 void bus_update_io(lssd_bus *b, bool force) {
         int fd = lss_transport_get_fd(&b->transport);
         /* a new socket may echo or not; the engine applies it from its next step */
-        lss_master_set_tx_confirm(b->engine, b->port && socketcan_port_echoes(b->port));
+        lss_master_set_tx_confirm(b->engine, lss_transport_echoes(&b->transport));
         if (fd != b->io_fd)
                 b->echo_pending = false;
         if (fd == b->io_fd && !force)
@@ -266,6 +210,8 @@ void bus_update_io(lssd_bus *b, bool force) {
                 return;
         }
         b->io_fd = fd;
+        if (bus_tx_pending(b))
+                (void) sd_event_source_set_enabled(b->io_source, SD_EVENT_OFF);
 }
 
 static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata) {
@@ -280,7 +226,7 @@ static int on_io(sd_event_source *s, int fd, uint32_t revents, void *userdata) {
 int bus_on_timer(sd_event_source *s, uint64_t usec, void *userdata) {
         lssd_bus *b = userdata;
         if (b->io_fd < 0)
-                bus_poll_rx(b); /* simulated bus: frames are picked up on time */
+                bus_poll_rx(b); /* no fd (simulated bus): frames are picked up on time */
         lss_master_on_time(b->engine, bus_now(b));
         bus_process(b);
         return 0;

@@ -64,36 +64,18 @@ void bus_update_timing(lssd_bus *b) {
 
 /* ---- life cycle ---- */
 
+/* The host picks what is behind the seam: SocketCAN, the simulated bus of
+ * --simulate, a test's fake. 1: the host said why the link is gone. */
 static int bus_open_transport(lssd_bus *b) {
-        int r;
-
-        if (b->host.args->simulate) {
-                r = lssd_simbus_new(b->config->bitrate, &b->sim);
-                if (r < 0)
-                        return r;
-                for (size_t i = 0; i < b->host.args->n_sim_slaves; i++) {
-                        const lssd_sim_slave *s = &b->host.args->sim_slaves[i];
-                        if (strcmp(s->ifname, b->ifname) != 0)
-                                continue;
-                        r = lssd_simbus_add_slave(b->sim, &s->id, s->node_id);
-                        if (r < 0)
-                                return r;
-                }
-                lssd_simbus_transport(b->sim, &b->transport);
-                b->link = LSS_LINK_UP;
-                return 0;
-        }
-
-        socketcan_config sc = {
-                .on_link_state = bus_on_link_state,
+        const lss_transport_hooks hooks = {
+                .link_changed = bus_on_link_state,
                 .userdata = b,
         };
-        r = socketcan_port_open(b->ifname, &sc, &b->port);
+        int r = b->host.ops->open_transport(b->host.userdata, b->ifname, b->config->bitrate, &hooks, &b->transport);
         if (r < 0)
                 return r;
-        socketcan_port_transport(b->port, &b->transport);
-        b->link = socketcan_port_state(b->port);
-        return 0;
+        b->link = lss_transport_link(&b->transport);
+        return r;
 }
 
 int lssd_bus_new(const lssd_bus_host *host, const lssd_bus_config *config, lssd_bus **ret) {
@@ -144,17 +126,22 @@ int lssd_bus_new(const lssd_bus_host *host, const lssd_bus_config *config, lssd_
         };
         lss_master_set_progress(b->engine, bus_on_engine_progress, b);
         lss_master_set_found(b->engine, bus_on_engine_found, b);
+        lss_master_set_retune(b->engine, bus_on_retune_wanted, b);
 
         r = bus_open_transport(b);
         if (r < 0) {
                 log_error("%s: failed to open: %s", b->ifname, strerror(-r));
                 goto fail;
         }
+        bool explained = r > 0;
 
         r = sd_event_add_time(b->host.event, &b->timer_source, CLOCK_MONOTONIC, UINT64_MAX, 1, bus_on_timer, b);
         if (r < 0)
                 goto fail;
         (void) sd_event_source_set_enabled(b->timer_source, SD_EVENT_OFF);
+        r = bus_tx_init(b);
+        if (r < 0)
+                goto fail;
         bus_update_io(b, true);
 
         if (host->dbus) {
@@ -165,16 +152,13 @@ int lssd_bus_new(const lssd_bus_host *host, const lssd_bus_config *config, lssd_
 
         b->state = lssd_bus_state(b);
         b->bitrate = lssd_bus_bitrate(b);
-        /* "link gone" alone does not say why: no such interface, or no CAN in this kernel at all */
-        if (!b->sim && b->link == LSS_LINK_GONE && !socketcan_kernel_has_can(NULL))
-                log_warning("%s: serving (SocketCAN, link gone): this kernel has no CAN support (no AF_CAN "
-                            "sockets; modprobe can can-raw?): %s cannot appear until it has; lssd --simulate "
-                            "runs without CAN", b->ifname, b->ifname);
-        else if (!b->sim && b->link == LSS_LINK_GONE)
-                log_notice("%s: serving (SocketCAN, link gone): no interface %s (yet); served when it appears",
-                           b->ifname, b->ifname);
+        if (explained)
+                ; /* the opener said why: no CAN in this kernel at all */
+        else if (b->link == LSS_LINK_GONE)
+                log_notice("%s: serving (%s, link gone): no interface %s (yet); served when it appears",
+                           b->ifname, b->transport.ops->kind, b->ifname);
         else
-                log_info("%s: serving (%s, link %s)", b->ifname, b->sim ? "simulated" : "SocketCAN",
+                log_info("%s: serving (%s, link %s)", b->ifname, b->transport.ops->kind,
                          lss_link_state_to_string(b->link));
 
         /* a crash may have left slaves in configuration state */
@@ -258,9 +242,9 @@ lssd_bus *lssd_bus_free(lssd_bus *b) {
         b->remove_source = sd_event_source_disable_unref(b->remove_source);
         b->io_source = sd_event_source_disable_unref(b->io_source);
         b->timer_source = sd_event_source_disable_unref(b->timer_source);
+        b->tx_retry_source = sd_event_source_disable_unref(b->tx_retry_source);
+        b->retune_source = sd_event_source_disable_unref(b->retune_source);
         lss_transport_close(&b->transport);
-        b->port = NULL;
-        b->sim = NULL;
         lss_master_free(b->engine);
         lssd_bus_config_free(b->config);
         free(b->boot_status);

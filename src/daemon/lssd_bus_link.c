@@ -10,44 +10,31 @@
 /* ---- link ---- */
 
 /* SetBitrate: the engine is silent and waits for the host interface to be
- * retuned: do it (rtnetlink on a real controller, the simulated bus with
- * --simulate; skipped on vcan) and tell the engine. Returns true when the
- * socket changed. */
-bool bus_retune(lssd_bus *b) {
+ * retuned: do it through the transport (rtnetlink on a real controller, the
+ * simulated bus with --simulate; skipped on vcan) and tell the engine. */
+static void bus_retune(lssd_bus *b) {
         lssd_job *j = b->job;
         enum lss_retune how = LSS_RETUNE_FAILED;
         uint32_t rate;
         uint64_t deadline, now, done;
-        bool reopened = false;
         int r;
 
         if (!lss_master_retune_wanted(b->engine, &rate, &deadline))
-                return false;
+                return;
         now = bus_now(b);
         if (!j || j->type != LSSD_JOB_SET_BITRATE || !b->config->bitrate_change) {
                 if (j)
                         j->retune_error = EPERM;
-        } else if (b->sim) {
-                lssd_simbus_set_bitrate(b->sim, rate);
-                how = LSS_RETUNE_DONE;
         } else if (b->link_virtual) {
                 how = LSS_RETUNE_SKIPPED;
         } else {
                 j->retune_until = now + RETUNE_LINK_GRACE_US;
-                r = rtnl_set_can_bitrate(NULL, b->ifname, rate);
-                if (r == 0) {
+                r = lss_transport_retune(&b->transport, rate);
+                if (r == 0)
                         how = LSS_RETUNE_DONE;
-                        /* the old socket carries a pending ENETDOWN from the link going down */
-                        if (b->port) {
-                                r = socketcan_port_reopen(b->port);
-                                if (r < 0)
-                                        log_warning("%s: re-opening after the retune failed: %s", b->ifname,
-                                                    strerror(-r));
-                                reopened = true;
-                        }
-                } else if (r == -EOPNOTSUPP) {
+                else if (r == -EOPNOTSUPP)
                         how = LSS_RETUNE_SKIPPED;
-                } else {
+                else {
                         j->retune_error = -r;
                         log_error("%s: retuning the interface to %u bit/s failed: %s%s", b->ifname, rate,
                                   strerror(-r), r == -EPERM ? " (lssd needs CAP_NET_ADMIN for bit-rate changes: "
@@ -61,10 +48,29 @@ bool bus_retune(lssd_bus *b) {
         log_info("%s: SetBitrate: host interface retune: %s (%llu us)", b->ifname, lss_retune_name(how),
                  (unsigned long long) (done - now));
         lss_master_retune_done(b->engine, how, done);
-        return reopened;
 }
 
-void bus_on_link_state(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata) {
+static int on_retune(sd_event_source *s, void *userdata) {
+        lssd_bus *b = userdata;
+        b->retune_source = sd_event_source_disable_unref(b->retune_source);
+        bus_retune(b);
+        /* a retune re-opens the socket */
+        bus_update_io(b, true);
+        bus_process(b);
+        return 0;
+}
+
+/* The engine asks from inside a step: retune from the loop, right after. */
+void bus_on_retune_wanted(void *userdata) {
+        lssd_bus *b = userdata;
+        if (b->retune_source)
+                return;
+        int r = sd_event_add_defer(b->host.event, &b->retune_source, on_retune, b);
+        if (r < 0)
+                log_error("%s: failed to schedule the retune: %s", b->ifname, strerror(-r));
+}
+
+void bus_on_link_state(void *userdata, lss_link_state old_state, lss_link_state new_state) {
         lssd_bus *b = userdata;
         /* the fd is still open now but not after we return: forget it here */
         if (new_state == LSS_LINK_GONE) {
@@ -75,7 +81,7 @@ void bus_on_link_state(socketcan_port *p, lss_link_state old_state, lss_link_sta
 }
 
 static void bus_after_link_change(lssd_bus *b) {
-        lss_link_state old = b->link, now_state = socketcan_port_state(b->port);
+        lss_link_state old = b->link, now_state = lss_transport_link(&b->transport);
         b->link_changed = false;
         b->link = now_state;
         bus_update_io(b, true);
@@ -107,8 +113,17 @@ static void bus_after_link_change(lssd_bus *b) {
 }
 
 void lssd_bus_link_event(lssd_bus *b, const rtnl_link *link) {
-        if (!b->port)
-                return;
+        const lss_link_event ev = {
+                .ifindex = link->ifindex,
+                .ifname = link->ifname,
+                .present = !link->removed,
+                .flags = link->flags,
+        };
+        int r = lss_transport_link_event(&b->transport, &ev);
+        if (r == -EOPNOTSUPP)
+                return; /* the host's links do not matter to this transport (simulated bus) */
+        if (r < 0)
+                log_warning("%s: failed to re-open: %s", b->ifname, strerror(-r));
         if (link->ifname[0] && strcmp(link->ifname, b->ifname) == 0 && !link->removed) {
                 uint32_t rate = strcmp(link->kind, "can") == 0 ? link->bitrate : 0;
                 bool virt = strcmp(link->kind, "vcan") == 0 || strcmp(link->kind, "vxcan") == 0;
@@ -120,9 +135,6 @@ void lssd_bus_link_event(lssd_bus *b, const rtnl_link *link) {
                         bus_flush_changes(b);
                 }
         }
-        int r = socketcan_port_link_event(b->port, link->ifindex, link->ifname, !link->removed, link->flags);
-        if (r < 0)
-                log_warning("%s: failed to re-open: %s", b->ifname, strerror(-r));
         if (r != 0 || b->link_changed)
                 bus_after_link_change(b);
 }

@@ -3,17 +3,18 @@
  * Nothing but those files includes this header. */
 #pragma once
 
-#include "can/socketcan.h"
 #include "can/transport.h"
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_heard.h"
 #include "daemon/lssd_holder.h"
-#include "daemon/lssd_simbus.h"
 
 /* Frames read per wake-up before the other buses get their turn. */
 #define RX_BATCH 64u
 /* how much earlier than its write an echo may read (clock conversion error), see bus_on_echo() */
 #define ECHO_CLOCK_SLACK_US 1000u
+/* How long a frame the tx queue refuses is tried again before the running
+ * operation fails (a frame takes 0.1..1 ms on the wire). */
+#define LSSD_TX_TIMEOUT_MS 100u
 /* Link events this long after our own retune are taken for it. */
 #define RETUNE_LINK_GRACE_US (5u * 1000000u)
 
@@ -32,9 +33,7 @@ struct lssd_bus {
         char *path;
         lssd_bus_config *config;         /* own copy: a bus being removed outlives its configuration */
 
-        lss_transport transport;
-        socketcan_port *port;            /* behind transport, NULL when simulated */
-        lssd_simbus *sim;                /* behind transport when simulated */
+        lss_transport transport;         /* SocketCAN, the simulated bus, a test's fake: the host's choice */
         sd_event_source *io_source;
         int io_fd;
         sd_event_source *timer_source;
@@ -43,13 +42,19 @@ struct lssd_bus {
         uint64_t rx_dropped;
         uint32_t link_bitrate;           /* from rtnetlink for real controllers, 0 otherwise */
         bool link_virtual;               /* vcan/vxcan: frames take no time on the "wire" */
-        bool link_changed;               /* socketcan reported a change: handle it outside the callback */
+        bool link_changed;               /* the transport reported a change: handle it outside the callback */
+        sd_event_source *retune_source;  /* SetBitrate: the engine waits for the host interface */
 
         lss_master *engine;
         bool engine_running;             /* we started an operation and did not collect it yet */
         lss_frame echo_want;             /* last LSS request written: its echo confirms it is on the wire */
         uint64_t echo_want_at;           /* when it was written */
         bool echo_pending;
+        lss_frame tx_frame;              /* handed out by the engine, refused by a full tx queue */
+        bool tx_held;
+        uint64_t tx_deadline;            /* 0 until tx_frame is first refused */
+        uint64_t tx_sent_at;             /* last write of the frames handed out, for on_sent() */
+        sd_event_source *tx_retry_source;
 
         lssd_job_queue queue;
         lssd_job *job;                   /* running */
@@ -84,7 +89,12 @@ void bus_set_progress(lssd_bus *b, double p);
 void bus_on_engine_progress(void *userdata, double p);
 void bus_on_engine_found(void *userdata, const lss_device *d);
 
-/* lssd_bus_engine.c: frames in and out, the timer, the job at the head */
+/* lssd_bus_tx.c: frames out, held while the tx queue is full */
+int bus_tx_init(lssd_bus *b);
+void bus_flush_tx(lssd_bus *b);
+bool bus_tx_pending(const lssd_bus *b);
+
+/* lssd_bus_engine.c: frames in, the timer, the job at the head */
 void bus_process(lssd_bus *b);
 void bus_update_io(lssd_bus *b, bool force);
 int bus_on_timer(sd_event_source *s, uint64_t usec, void *userdata);
@@ -97,8 +107,8 @@ void bus_queue_boot_pass(lssd_bus *b);
 void bus_on_holder_gone(lssd_holder *h, void *userdata);
 
 /* lssd_bus_link.c: the host interface */
-bool bus_retune(lssd_bus *b);
-void bus_on_link_state(socketcan_port *p, lss_link_state old_state, lss_link_state new_state, void *userdata);
+void bus_on_retune_wanted(void *userdata);
+void bus_on_link_state(void *userdata, lss_link_state old_state, lss_link_state new_state);
 
 /* lssd_bus_views.c: what the registry and the job runners see */
 extern const lssd_devices_ops bus_devices_ops;

@@ -30,7 +30,7 @@ const char *lssd_bus_job_name(const lssd_bus *b) {
 }
 
 bool lssd_bus_idle(const lssd_bus *b) {
-        return !b->job && b->queue.n == 0 && !b->engine_running;
+        return !b->job && b->queue.n == 0 && !b->engine_running && !bus_tx_pending(b);
 }
 
 void bus_update_published(lssd_bus *b) {

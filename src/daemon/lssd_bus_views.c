@@ -64,7 +64,7 @@ static void env_host_link(void *userdata, lssd_host_link *ret) {
                 .ifname = b->ifname,
                 .link = b->link,
                 .bus_state = b->bus_state,
-                .simulated = b->sim != NULL,
+                .simulated = b->host.args->simulate,
                 .virtual_link = b->link_virtual,
                 .bitrate = lssd_bus_bitrate(b),
         };

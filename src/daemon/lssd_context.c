@@ -13,6 +13,7 @@
 #include "daemon/lssd_log.h"
 #include "daemon/lssd_path.h"
 #include "daemon/lssd_ready.h"
+#include "daemon/lssd_transport_open.h"
 #include "daemon/lssd_vtables.h"
 
 static void lssd_context_emit_buses_changed(lssd_context *ctx);
@@ -144,6 +145,12 @@ static void host_idle(void *userdata) {
                 lssd_context_check_stopped(ctx);
 }
 
+static int host_open_transport(void *userdata, const char *ifname, uint32_t bitrate,
+                               const lss_transport_hooks *hooks, lss_transport *ret) {
+        lssd_context *ctx = userdata;
+        return lssd_transport_open(&ctx->args, ifname, bitrate, hooks, ret);
+}
+
 static const lssd_bus_host_ops bus_host_ops = {
         .next_job_id = host_next_job_id,
         .stopping = host_stopping,
@@ -152,6 +159,7 @@ static const lssd_bus_host_ops bus_host_ops = {
         .boot_pass_done = host_boot_pass_done,
         .removed = host_removed,
         .idle = host_idle,
+        .open_transport = host_open_transport,
 };
 
 static int context_add_bus(lssd_context *ctx, const lssd_bus_config *c) {

@@ -173,6 +173,8 @@ static int proc_bitrate(lss_master *m) {
         s->retune = LSS_RETUNE_WANTED;
         m->step = (lss_step) { .kind = STEP_DELAY, .wait_us = RETUNE_WAIT_MAX_US };
         step_start(m);
+        if (m->retune_fn)
+                m->retune_fn(m->retune_ud);
         PT_YIELD(&s->pc);
         if (s->retune == LSS_RETUNE_WANTED)
                 s->retune = LSS_RETUNE_TIMEOUT;

@@ -200,6 +200,8 @@ struct lss_master {
         double prog_base, prog_span;
         unsigned expected_finds;  /* lss_master_set_expected_finds() */
         void *progress_ud;
+        lss_retune_fn retune_fn;  /* lss_master_set_retune() */
+        void *retune_ud;
         lss_found_fn found_fn;    /* lss_master_set_found() */
         void *found_ud;
         lss_identity *announced;  /* identities found_fn was called for in this operation */

@@ -100,6 +100,11 @@ void master_progress(lss_master *m, double p) {
                 m->progress(m->progress_ud, m->prog_base + m->prog_span * p);
 }
 
+void lss_master_set_retune(lss_master *m, lss_retune_fn fn, void *userdata) {
+        m->retune_fn = fn;
+        m->retune_ud = userdata;
+}
+
 void lss_master_set_found(lss_master *m, lss_found_fn fn, void *userdata) {
         m->found_fn = fn;
         m->found_ud = userdata;

@@ -379,6 +379,10 @@ int lss_master_set_bitrate(lss_master *m, const lss_bitrate_params *p, uint64_t 
 /* True while the engine waits for the host interface to be retuned: to
  * `*bitrate`, best before `*deadline` (end of the first delay period). */
 bool lss_master_retune_wanted(const lss_master *m, uint32_t *bitrate, uint64_t *deadline);
+/* Called once when the engine starts waiting for the retune (from inside
+ * lss_master_on_time/on_frame: retune later, from the caller's own loop). */
+typedef void (*lss_retune_fn)(void *userdata);
+void lss_master_set_retune(lss_master *m, lss_retune_fn fn, void *userdata);
 /* The caller's answer: LSS_RETUNE_DONE, _SKIPPED or _FAILED. */
 void lss_master_retune_done(lss_master *m, enum lss_retune how, uint64_t now);
 /* What happened to the host retune in the last bit-rate change. */

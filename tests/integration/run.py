@@ -810,6 +810,91 @@ def test_two_buses():
                    'vcan1 %.3f..%.3f' % (f0[0], f0[-1], f1[0], f1[-1]))
 
 
+def test_txqueue_full():
+    """vcan0's tx queue held full (a token-bucket qdisc that drains one frame a second, kept full
+    by cangen) while a burst of Scans waits for it on vcan0: the Scan on vcan1 finishes normally
+    and property reads answer promptly. An lssd that waited for tx room inside the event loop
+    (up to 100 ms per frame) answered a read sent behind the burst only after every vcan0 Scan
+    had had its 100 ms: seconds."""
+    a = [Slave(0x9A, 3, 1, 0x10 + i) for i in range(2)]
+    b = [Slave(0x9A, 3, 2, 0x20 + i) for i in range(3)]
+    burst = 20
+    with Env({'vcan0': a, 'vcan1': b}) as env:
+        if not env.real:
+            raise Skip('needs a real interface with a tx queue')
+        subprocess.run(['modprobe', 'sch_tbf'], check=False)
+        # vcan has no queue of its own (txqueuelen 0, noqueue): give it one
+        subprocess.run(['ip', 'link', 'set', 'vcan0', 'txqueuelen', '1000'], check=True)
+        subprocess.run(['tc', 'qdisc', 'replace', 'dev', 'vcan0', 'root', 'tbf', 'rate', '100bit', 'burst', '64',
+                        'limit', '64'], check=True)
+        flood = subprocess.Popen(['cangen', 'vcan0', '-g', '5', '-i', '-I', '123', '-L', '8'],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            time.sleep(0.5)
+            p = subprocess.run(['cangen', 'vcan0', '-g', '0', '-I', '123', '-L', '8', '-n', '50'],
+                               capture_output=True, text=True, timeout=60)
+            expect(p.returncode != 0 and 'No buffer space' in p.stderr + p.stdout,
+                   'the queue of vcan0 is full (cangen meets ENOBUFS): rc %d %r' % (p.returncode, p.stderr[-200:]))
+
+            done = threading.Event()
+            latencies = []
+            found = {}
+
+            def reader():
+                c = dbusmini.Connection(env.address)
+                while not done.is_set():
+                    t = time.monotonic()
+                    c.call(SERVICE, B1, 'org.freedesktop.DBus.Properties', 'Get', 'ss', [BUS_IFACE, 'State'],
+                           timeout=60)
+                    latencies.append(time.monotonic() - t)
+                    time.sleep(0.01)
+                c.close()
+
+            def scan1():
+                c = dbusmini.Connection(env.address)
+                found['vcan1'] = c.call(SERVICE, B1, BUS_IFACE, 'Scan', 'a{sv}', [{}], timeout=300)[0]
+                c.close()
+
+            threads = [threading.Thread(target=reader), threading.Thread(target=scan1)]
+            for t in threads:
+                t.start()
+            time.sleep(0.2)
+            c0 = env.connect()
+            t0 = time.monotonic()
+            serials = [c0.send(SERVICE, B0, BUS_IFACE, 'Scan', 'a{sv}', [{}]) for _ in range(burst)]
+            # busctl too, right behind the burst
+            t = time.monotonic()
+            state1 = env.get(B1, BUS_IFACE, 'State')
+            log('busctl get-property behind the burst: %.3f s (%s)' % (time.monotonic() - t, state1))
+            errors = []
+            for s in serials:
+                try:
+                    c0.wait_reply(s, 120)
+                except dbusmini.DBusError as e:
+                    errors.append(str(e))
+            log('%d Scans on vcan0: %d failed in %.1f s, e.g. %s' % (burst, len(errors), time.monotonic() - t0,
+                                                                      errors[:1]))
+            threads[1].join(300)
+            done.set()
+            threads[0].join(60)
+            worst = max(latencies) if latencies else None
+            log('%d property reads meanwhile, worst %.3f s' % (len(latencies), worst or -1))
+            expect(any('transmit queue stayed full' in e for e in errors),
+                   'a Scan on vcan0 failed on the full queue (else the queue was not held full)')
+            expect_eq(sorted(found.get('vcan1', [])), sorted([s.identity + (255,) for s in b]), 'Scan on vcan1')
+            expect(len(latencies) >= 5, 'property reads went on: %d' % len(latencies))
+            expect(worst is not None and worst < 1.0, 'worst property read %.3f s' % (worst or -1))
+        finally:
+            flood.terminate()
+            flood.wait(10)
+            subprocess.run(['tc', 'qdisc', 'del', 'dev', 'vcan0', 'root'], check=False)
+            subprocess.run(['ip', 'link', 'set', 'vcan0', 'txqueuelen', '0'], check=False)
+        env.alive()
+        env.wait_until(lambda: env.get(B0, BUS_IFACE, 'State') == 'idle', timeout=60, what='vcan0 idle')
+        expect_eq(sorted(env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)[0]), sorted([list(s.identity) + [255] for s in a]),
+                  'Scan on vcan0 once the queue drains')
+
+
 # ---- life cycle ----
 
 def test_lifecycle():
@@ -1120,6 +1205,7 @@ TESTS = {
     'daemon-checks-credentials': test_daemon_checks_credentials,
     'concurrent-clients': test_concurrent_clients,
     'two-buses': test_two_buses,
+    'txqueue-full': test_txqueue_full,
     'lifecycle': test_lifecycle,
     'second-instance': test_second_instance,
     'check-config': test_check_config,

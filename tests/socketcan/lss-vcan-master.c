@@ -30,7 +30,11 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
                 while (lss_master_next_tx(m, &f)) {
                         /* taken before the last write: see lss_master_on_sent() */
                         t_send = socketcan_port_now(p);
-                        int r = socketcan_port_send(p, &f);
+                        /* a full tx queue: this tool may block, 100 ms at most */
+                        uint64_t until = t_send + 100000u;
+                        int r;
+                        while ((r = socketcan_port_send(p, &f)) == -EAGAIN && socketcan_port_now(p) < until)
+                                (void) poll(NULL, 0, 1);
                         if (getenv("LSS_DEBUG"))
                                 fprintf(stderr, "send %03X fd %d ifindex %d state %d -> %d\n", (unsigned) f.id,
                                         socketcan_port_fd(p), socketcan_port_ifindex(p), socketcan_port_state(p), r);

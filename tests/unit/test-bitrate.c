@@ -122,6 +122,45 @@ START_TEST(full_success_chain) {
 }
 END_TEST
 
+/* The engine tells its caller when the retune is due (lssd then retunes from
+ * its loop instead of asking after every frame): once per change, while
+ * retune_wanted() says so, never for another operation. */
+typedef struct retune_calls {
+        lss_master *m;
+        unsigned n, n_wanted;
+} retune_calls;
+
+static void on_retune(void *userdata) {
+        retune_calls *c = userdata;
+        c->n++;
+        c->n_wanted += lss_master_retune_wanted(c->m, NULL, NULL);
+}
+
+START_TEST(retune_due_is_told_once) {
+        lss_bitrate_device devs[2];
+        membus *b = bus_with(2, 125000, NULL, devs);
+        lss_master *m = master_default();
+        retune_calls c = { .m = m };
+        host h = { .answer = LSS_RETUNE_DONE, .retune_bus = true };
+
+        lss_master_set_retune(m, on_retune, &c);
+        lss_bitrate_params p = params(125000, 250000, devs, 2);
+        ck_assert_int_eq(lss_master_set_bitrate(m, &p, membus_now(b)), 0);
+        ck_assert_uint_eq(c.n, 0);
+        ck_assert_int_eq(drive(m, b, &h)->status, LSS_OK);
+        ck_assert_uint_eq(c.n, 1);
+        ck_assert_uint_eq(c.n_wanted, 1);
+        ck_assert_uint_eq(h.asked, 1);
+
+        /* not for anything else */
+        ck_assert_int_eq(lss_master_switch_selective(m, &devs[1].id, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        ck_assert_uint_eq(c.n, 1);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* The seed example: 13 00 02 -> 13 00 00, then 04 01, 15 10 00 (16 ms). */
 START_TEST(seed_example_bytes) {
         static const uint8_t configure[8] = { 0x13, 0x00, 0x02, 0, 0, 0, 0, 0 };
@@ -525,6 +564,7 @@ int main(void) {
         Suite *s = suite_create("bitrate");
         TCase *tc = tcase_create("bitrate");
         tcase_add_test(tc, full_success_chain);
+        tcase_add_test(tc, retune_due_is_told_once);
         tcase_add_test(tc, seed_example_bytes);
         tcase_add_test(tc, refusal_activates_nothing);
         tcase_add_test(tc, silent_configure_is_refusal);

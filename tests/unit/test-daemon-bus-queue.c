@@ -9,79 +9,22 @@
 #include <string.h>
 #include <systemd/sd-event.h>
 
-#include "daemon/lssd_bus.h"
 
-#include "daemon-util.h"
+#include "daemon/lssd_transport_open.h"
 
-typedef struct fake_host {
-        uint64_t next_id;
-        unsigned idle;
-} fake_host;
+#include "daemon-bus-fixture.h"
 
-static uint64_t host_next_job_id(void *userdata) {
-        fake_host *h = userdata;
-        return ++h->next_id;
+/* the simulated bus of --simulate, no slaves */
+static int open_simulated(void *userdata, const char *ifname, uint32_t bitrate, const lss_transport_hooks *hooks,
+                          lss_transport *ret) {
+        const lssd_args args = { .simulate = true };
+        return lssd_transport_open(&args, ifname, bitrate, hooks, ret);
 }
 
-static bool host_no(void *userdata) {
-        return false;
-}
+static const lssd_bus_host_ops host_ops = FAKE_HOST_OPS(open_simulated);
 
-static bool host_started(void *userdata) {
-        return true; /* no boot pass */
-}
-
-static void host_nothing(void *userdata) {
-}
-
-static void host_removed(void *userdata, lssd_bus *b) {
-}
-
-static void host_idle(void *userdata) {
-        fake_host *h = userdata;
-        h->idle++;
-}
-
-static const lssd_bus_host_ops host_ops = {
-        .next_job_id = host_next_job_id,
-        .stopping = host_no,
-        .started = host_started,
-        .status_changed = host_nothing,
-        .boot_pass_done = host_nothing,
-        .removed = host_removed,
-        .idle = host_idle,
-};
-
-typedef struct fixture {
-        sd_event *event;
-        fake_host host;
-        lssd_args args;
-        lssd_bus_config config;
-        lssd_bus *bus;
-} fixture;
-
-static void fixture_up(fixture *f) {
-        memset(f, 0, sizeof(*f));
-        ck_assert_int_ge(sd_event_new(&f->event), 0);
-        f->args.simulate = true;
-        f->args.queue_max = 8;
-        snprintf(f->config.interface, sizeof(f->config.interface), "sim0");
-        f->config.bitrate = 125000;
-        f->config.lss_timeout_ms = 20;
-        f->config.lss_timing = LSSD_LSS_TIMING_FIXED;
-        const lssd_bus_host host = {
-                .event = f->event,
-                .dbus = NULL,
-                .args = &f->args,
-                .ops = &host_ops,
-                .userdata = &f->host,
-        };
-        ck_assert_int_eq(lssd_bus_new(&host, &f->config, &f->bus), 0);
-}
-
-static void fixture_down(fixture *f) {
-        lssd_bus_free(f->bus);
-        sd_event_unref(f->event);
+static void up(fixture *f) {
+        fixture_up(f, "sim0", true, &host_ops);
 }
 
 /* Runs the loop until the bus is idle; `seen` gets the ids of the jobs in
@@ -99,18 +42,10 @@ static size_t run_until_idle(fixture *f, uint64_t *seen, size_t max) {
         return n;
 }
 
-static uint64_t submit_scan(fixture *f) {
-        lssd_job *j = NULL;
-        sd_bus_error e = SD_BUS_ERROR_NULL;
-        ck_assert_int_eq(lssd_job_new(LSSD_JOB_SCAN, NULL, &j), 0);
-        ck_assert_int_eq(lssd_bus_submit(f->bus, j, &e), 0);
-        return j->id;
-}
-
 START_TEST(order_one_at_a_time) {
         fixture f;
         uint64_t seen[16], ids[3];
-        fixture_up(&f);
+        up(&f);
 
         /* the first frame after start is switch-global waiting (a job of
          * its own, over as soon as it is sent) */
@@ -142,7 +77,7 @@ START_TEST(queue_bound) {
         fixture f;
         sd_bus_error e = SD_BUS_ERROR_NULL;
         uint64_t seen[16];
-        fixture_up(&f);
+        up(&f);
         lssd_bus_start(f.bus, false);
         run_until_idle(&f, seen, 16);
 
@@ -164,7 +99,7 @@ START_TEST(cancel_running_then_next) {
         fixture f;
         sd_bus_error e = SD_BUS_ERROR_NULL;
         uint64_t seen[16], a, b;
-        fixture_up(&f);
+        up(&f);
         lssd_bus_start(f.bus, false);
         run_until_idle(&f, seen, 16);
 
@@ -186,7 +121,7 @@ END_TEST
 START_TEST(stop_drops_queue) {
         fixture f;
         uint64_t seen[16], a;
-        fixture_up(&f);
+        up(&f);
         lssd_bus_start(f.bus, false);
         run_until_idle(&f, seen, 16);
 
@@ -208,18 +143,13 @@ START_TEST(stop_drops_queue) {
 }
 END_TEST
 
-static Suite *suite(void) {
-        Suite *s = suite_create("daemon-bus-queue");
-        TCase *tc = tcase_create("queue");
-        tcase_set_timeout(tc, 60);
+static void add_tests(TCase *tc) {
         tcase_add_test(tc, order_one_at_a_time);
         tcase_add_test(tc, queue_bound);
         tcase_add_test(tc, cancel_running_then_next);
         tcase_add_test(tc, stop_drops_queue);
-        suite_add_tcase(s, tc);
-        return s;
 }
 
 int main(void) {
-        return test_run_suite(suite());
+        return bus_test_main("daemon-bus-queue", add_tests);
 }

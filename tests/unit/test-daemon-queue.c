@@ -10,7 +10,7 @@
 #include "daemon/lssd_device.h"
 #include "daemon/lssd_job_queue.h"
 #include "daemon/lssd_path.h"
-#include "daemon/lssd_simbus.h"
+#include "simbus/simbus.h"
 
 static lssd_job *job(lssd_job_type t) {
         lssd_job *j = NULL;
@@ -200,21 +200,21 @@ START_TEST(sim_slave_spec) {
         char ifname[16];
         lss_identity id;
         uint8_t node;
-        ck_assert_int_eq(lssd_sim_slave_parse("vcan0:0xEC:0x1234:1:0x80001276", ifname, &id, &node), 0);
+        ck_assert_int_eq(simbus_slave_parse("vcan0:0xEC:0x1234:1:0x80001276", ifname, &id, &node), 0);
         ck_assert_str_eq(ifname, "vcan0");
         ck_assert_uint_eq(id.vendor, 0xEC);
         ck_assert_uint_eq(id.serial, 0x80001276u);
         ck_assert_uint_eq(node, 0xFF);
-        ck_assert_int_eq(lssd_sim_slave_parse("sim:1:2:3:4:127", ifname, &id, &node), 0);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:127", ifname, &id, &node), 0);
         ck_assert_uint_eq(node, 127);
-        ck_assert_int_eq(lssd_sim_slave_parse("sim:1:2:3:4:255", ifname, &id, &node), 0);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:255", ifname, &id, &node), 0);
         ck_assert_uint_eq(node, 0xFF);
-        ck_assert_int_eq(lssd_sim_slave_parse("sim:1:2:3:4:0", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(lssd_sim_slave_parse("sim:1:2:3", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(lssd_sim_slave_parse("sim:1:2:3:4:5:6", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(lssd_sim_slave_parse("sim:1:2:3:0x100000000", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(lssd_sim_slave_parse("sim:1:2:3:-1", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(lssd_sim_slave_parse("0123456789abcdef:1:2:3:4", ifname, &id, &node), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:0", ifname, &id, &node), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3", ifname, &id, &node), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:6", ifname, &id, &node), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:0x100000000", ifname, &id, &node), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:-1", ifname, &id, &node), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("0123456789abcdef:1:2:3:4", ifname, &id, &node), -EINVAL);
 }
 END_TEST
 

@@ -7,11 +7,11 @@
 #include <string.h>
 #include <time.h>
 
-#include "daemon/lssd_simbus.h"
+#include "simbus/simbus.h"
 #include "sim/membus.h"
 #include "util/time_util.h"
 
-struct lssd_simbus {
+struct simbus {
         membus *bus;
         uint64_t t0; /* CLOCK_MONOTONIC µs at virtual time 0 */
 };
@@ -21,21 +21,21 @@ static uint64_t monotonic_us(void) {
 }
 
 /* Run the simulation up to the real present. */
-static void catch_up(lssd_simbus *s) {
+static void catch_up(simbus *s) {
         uint64_t now = monotonic_us();
         if (now > s->t0 && now - s->t0 > membus_now(s->bus))
                 membus_advance(s->bus, now - s->t0);
 }
 
 static int sim_send(void *impl, const lss_frame *f) {
-        lssd_simbus *s = impl;
+        simbus *s = impl;
         catch_up(s);
         membus_master_send(s->bus, f);
         return 0;
 }
 
 static int sim_recv(void *impl, lss_frame *f, uint64_t *rx_us) {
-        lssd_simbus *s = impl;
+        simbus *s = impl;
         uint64_t t;
         catch_up(s);
         if (!membus_master_recv(s->bus, f, &t))
@@ -53,32 +53,48 @@ static uint64_t sim_now(void *impl) {
 }
 
 static void sim_close(void *impl) {
-        lssd_simbus *s = impl;
+        simbus *s = impl;
         if (!s)
                 return;
         membus_free(s->bus);
         free(s);
 }
 
+/* SetBitrate: the simulated host controller follows at once. */
+static int sim_retune(void *impl, uint32_t bitrate) {
+        simbus *s = impl;
+        catch_up(s);
+        membus_set_bitrate(s->bus, bitrate);
+        return 0;
+}
+
+static uint64_t sim_next_event(void *impl) {
+        simbus *s = impl;
+        uint64_t t = membus_next_event(s->bus);
+        return t == UINT64_MAX ? UINT64_MAX : t + s->t0;
+}
+
 static const lss_transport_ops sim_ops = {
+        .kind = "simulated",
         .send = sim_send,
         .recv = sim_recv,
         .get_fd = sim_get_fd,
         .now = sim_now,
-        .status = NULL,
+        .next_event = sim_next_event,
+        .retune = sim_retune,
         .close = sim_close,
 };
 
 /* LSSD_SIM_TRACE=1: every frame on the simulated wire to stderr, candump style. */
 static void trace_frame(void *ud, const lss_frame *f, uint64_t t_us) {
-        const lssd_simbus *s = ud;
+        const simbus *s = ud;
         char buf[64];
         fprintf(stderr, "(%" PRIu64 ".%06" PRIu64 ") sim %s\n", (t_us + s->t0) / 1000000u, (t_us + s->t0) % 1000000u,
                 lss_frame_format(f, buf, sizeof(buf)));
 }
 
-int lssd_simbus_new(uint32_t bitrate, lssd_simbus **ret) {
-        lssd_simbus *s = calloc(1, sizeof(*s));
+int simbus_new(uint32_t bitrate, simbus **ret) {
+        simbus *s = calloc(1, sizeof(*s));
         if (!s)
                 return -ENOMEM;
         s->bus = membus_new(bitrate);
@@ -95,7 +111,7 @@ int lssd_simbus_new(uint32_t bitrate, lssd_simbus **ret) {
         return 0;
 }
 
-int lssd_simbus_add_slave(lssd_simbus *s, const lss_identity *id, uint8_t node_id) {
+int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id) {
         lss_slave_faults faults;
         lss_slave_faults_default(&faults);
         /* a little latency, as real slaves have */
@@ -116,18 +132,8 @@ int lssd_simbus_add_slave(lssd_simbus *s, const lss_identity *id, uint8_t node_i
         return 0;
 }
 
-void lssd_simbus_transport(lssd_simbus *s, lss_transport *ret) {
+void simbus_transport(simbus *s, lss_transport *ret) {
         *ret = (lss_transport) { .ops = &sim_ops, .impl = s };
-}
-
-void lssd_simbus_set_bitrate(lssd_simbus *s, uint32_t bitrate) {
-        catch_up(s);
-        membus_set_bitrate(s->bus, bitrate);
-}
-
-uint64_t lssd_simbus_next_event(lssd_simbus *s) {
-        uint64_t t = membus_next_event(s->bus);
-        return t == UINT64_MAX ? UINT64_MAX : t + s->t0;
 }
 
 static int parse_u32(const char *s, uint32_t *ret) {
@@ -140,7 +146,7 @@ static int parse_u32(const char *s, uint32_t *ret) {
         return 0;
 }
 
-int lssd_sim_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id) {
+int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id) {
         char buf[128], *fields[7];
         size_t n = 0;
 
