@@ -75,7 +75,7 @@ static int bus_open_transport(lssd_bus *b) {
                         const lssd_sim_slave *s = &b->host.args->sim_slaves[i];
                         if (strcmp(s->ifname, b->ifname) != 0)
                                 continue;
-                        r = lssd_simbus_add_slave(b->sim, &s->id, s->node_id);
+                        r = lssd_simbus_add_slave(b->sim, &s->id, s->node_id, s->canopennode);
                         if (r < 0)
                                 return r;
                 }

@@ -6,9 +6,10 @@
 #include "engine-util.h"
 
 static lss_slave_faults faults_canopennode(void) {
-        lss_slave_faults f = faults_latency(1000, 300);
-        f.no_identify = true;
-        f.canopennode_lss = true;
+        lss_slave_faults f;
+        lss_slave_faults_canopennode(&f);
+        f.latency_us = 1000;
+        f.jitter_us = 300;
         return f;
 }
 
