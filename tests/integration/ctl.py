@@ -281,7 +281,10 @@ def test_scan_config():
     configured = [Slave(0xEC, 0x1234, 0x00010002, 0x1001, 5), Slave(0xEC, 0x1234, 0x00010002, 0x1002, 6),
                   Slave(0xEC, 0x1234, 0x00010003, 0x80001003, 7)]
     fresh = Slave(0xEC, 0x1234, 0x00010002, 0x1004)
-    with Env({'vcan0': configured + [fresh]}, candump=True) as env:
+    # lss-sim only: answers SDO, ignores Switch State Selective (vendor): found by SDO alone
+    real = os.environ.get('LSSD_TEST_BACKEND', 'vcan') != 'simulate'
+    sdo_only = [Slave(0x6006, 1, 1, 0x66, 9, faults=['ignore-cs=0x40'])] if real else []
+    with Env({'vcan0': configured + [fresh] + sdo_only}, candump=True) as env:
         ctl = Ctl(env)
         ctl.fails('usage', '--as-config does not go with --json', 'scan', '--as-config', '--json')
         ctl.fails('usage', "--as-config does not go with 'list'", 'list', '--as-config')
@@ -289,15 +292,18 @@ def test_scan_config():
         env.step('lssctl scan --as-config:\n' + out)
         lines = out.splitlines()
         expect(lines[0].startswith("# lssd.conf(5) buses as found by 'lssctl scan --as-config'"), 'header: %r' % out)
-        expect('3 devices mapped at their current node-IDs, 1 commented out (see there), on vcan0.' in out,
-               'header counts: %r' % out)
+        expect('3 devices mapped at their current node-IDs, %d commented out (see there), on vcan0.'
+               % (1 + len(sdo_only)) in out, 'header counts: %r' % out)
         entry = '{ vendor = 0x%08x; product = 0x%08x; revision = 0x%08x; serial = 0x%08x; node_id = %s; }'
         active = [x.strip().rstrip(',') for x in lines if x.strip().startswith('{ vendor')]
         expect_eq(active, [entry % (s.identity + (s.node_id,)) for s in configured], 'one map line per device')
         commented = [x.strip() for x in lines if x.strip().startswith('# { vendor')]
-        expect_eq(commented, ['# ' + entry % (fresh.identity + ('N',)) +
-                              '  # non-configured (node-ID 255): give it a node-ID, then scan again'],
-                  'the non-configured device, commented out')
+        # by node-ID: the one found by SDO only (9) before the non-configured one
+        expect_eq(commented, ['# ' + entry % (s.identity + (s.node_id,)) + '  # found by SDO only: it does not '
+                              'answer LSS, so lssd cannot give it a node-ID' for s in sdo_only] +
+                  ['# ' + entry % (fresh.identity + ('N',)) +
+                   '  # non-configured (node-ID 255): give it a node-ID, then scan again'],
+                  'the non-configured device and the one found by SDO only, commented out')
         expect('interface = "vcan0";' in out and 'bitrate = 125000;' in out, 'the bus: %r' % out)
 
         path = os.path.join(env.dir, 'frozen.conf')
