@@ -107,6 +107,29 @@ static int bus_prop(sd_bus_message *m, const char *name, void *userdata) {
         return 0;
 }
 
+/* FoundBy (as); 1: read, 0: another type (skip) */
+static int read_found_by(sd_bus_message *m, ctl_device_info *d) {
+        const char *contents, *s;
+        char t;
+        int r = sd_bus_message_peek_type(m, &t, &contents);
+        if (r < 0)
+                return r;
+        if (t != 'v' || !contents || strcmp(contents, "as") != 0)
+                return 0;
+        r = sd_bus_message_enter_container(m, 'v', "as");
+        if (r >= 0)
+                r = sd_bus_message_enter_container(m, 'a', "s");
+        while (r >= 0 && (r = sd_bus_message_read_basic(m, 's', &s)) > 0) {
+                d->found_lss |= strcmp(s, LSSD_FOUND_BY_LSS) == 0;
+                d->found_sdo |= strcmp(s, LSSD_FOUND_BY_SDO) == 0;
+        }
+        if (r >= 0)
+                r = sd_bus_message_exit_container(m);
+        if (r >= 0)
+                r = sd_bus_message_exit_container(m);
+        return r < 0 ? r : 1;
+}
+
 static int device_prop(sd_bus_message *m, const char *name, void *userdata) {
         ctl_device_info *d = userdata;
         static const char *const ids[4] = { "VendorId", "ProductCode", "RevisionNumber", "SerialNumber" };
@@ -129,6 +152,8 @@ static int device_prop(sd_bus_message *m, const char *name, void *userdata) {
         }
         if (strcmp(name, "State") == 0)
                 return (r = read_string(m, &d->state)) < 0 ? r : 1;
+        if (strcmp(name, LSSD_DEVICE_FOUND_BY) == 0)
+                return read_found_by(m, d);
         return 0;
 }
 

@@ -33,6 +33,7 @@ typedef struct ctl_device_info {
         uint8_t mapped_node_id;   /* 0: not in the map */
         char *state;
         uint64_t last_seen;       /* µs since the epoch, 0: never */
+        bool found_lss, found_sdo; /* FoundBy: how the last Scan that found it reached it */
 } ctl_device_info;
 
 typedef struct ctl_objects {

@@ -25,6 +25,7 @@ typedef struct found {
         uint8_t old_id, new_id;   /* scan: new_id is the node-ID */
         char *outcome, *detail;   /* auto-assign */
         bool revision_unknown;    /* a missing device from a map entry without revision */
+        bool by_lss, by_sdo;      /* scan: the device's FoundBy */
 } found;
 
 typedef struct results {
@@ -143,22 +144,57 @@ static void print_problems(const results *res) {
         }
 }
 
-/* The reply gives a missing device the map's identity, whose revision is 0
- * when the map has none: the Device object says so (RevisionKnown). */
-static void mark_unknown_revisions(ctl_context *c, results *res) {
-        bool any = false;
-        for (size_t i = 0; i < res->n; i++)
-                any |= strcmp(res->v[i].outcome, "missing") == 0;
+/* What the replies do not carry, from the Device objects: auto-assign's
+ * reply gives a missing device the map's identity, whose revision is 0 when
+ * the map has none (RevisionKnown); scan's does not say how each device
+ * was found (FoundBy). */
+static void annotate_from_objects(ctl_context *c, results *res, bool scan) {
+        bool any = scan;
+        for (size_t i = 0; i < res->n && !any; i++)
+                any = strcmp(res->v[i].outcome, "missing") == 0;
         ctl_objects o = { 0 };
         if (!any || ctl_objects_load(c, &o) < 0)
                 return;
         for (size_t i = 0; i < res->n; i++)
-                for (size_t k = 0; k < o.n_devices; k++)
-                        if (strcmp(res->v[i].outcome, "missing") == 0 &&
-                            strcmp(o.devices[k].ifname, res->v[i].ifname) == 0 &&
-                            memcmp(o.devices[k].id, res->v[i].id, sizeof(res->v[i].id)) == 0)
-                                res->v[i].revision_unknown = o.devices[k].revision_unknown;
+                for (size_t k = 0; k < o.n_devices; k++) {
+                        const ctl_device_info *d = &o.devices[k];
+                        if (strcmp(d->ifname, res->v[i].ifname) != 0 ||
+                            memcmp(d->id, res->v[i].id, sizeof(res->v[i].id)) != 0)
+                                continue;
+                        if (scan) {
+                                res->v[i].by_lss = d->found_lss;
+                                res->v[i].by_sdo = d->found_sdo;
+                        } else if (strcmp(res->v[i].outcome, "missing") == 0)
+                                res->v[i].revision_unknown = d->revision_unknown;
+                }
         ctl_objects_done(&o);
+}
+
+/* FoundBy as the table shows it: "lss,sdo", "lss", "sdo" or "-" */
+static const char *found_by_text(const found *f) {
+        return f->by_lss && f->by_sdo ? LSSD_FOUND_BY_LSS "," LSSD_FOUND_BY_SDO
+                : f->by_lss ? LSSD_FOUND_BY_LSS : f->by_sdo ? LSSD_FOUND_BY_SDO : "-";
+}
+
+/* found by SDO alone: it did not answer LSS, so lssd cannot give it a node-ID */
+static bool sdo_only(const found *f) {
+        return f->by_sdo && !f->by_lss;
+}
+
+/* scan: the count, and what the scan could not look at */
+static void print_scan_legend(const ctl_context *c, const results *res) {
+        size_t only = 0;
+        for (size_t i = 0; i < res->n; i++)
+                only += sdo_only(&res->v[i]);
+        printf("%zu device%s found", res->n, res->n == 1 ? "" : "s");
+        if (only > 0)
+                printf(", %zu by SDO only (no LSS answer: lssd cannot assign %s)", only, only == 1 ? "it" : "them");
+        printf(".\n");
+        if (c->no_sdo)
+                printf("Not looked for (--no-sdo): configured devices of vendor/product pairs not in the map.\n");
+        else
+                printf("Not looked for: configured devices in NMT Stopped (no SDO) of pairs not in the map; "
+                       "lssd's journal names the node-IDs it heard but could not identify.\n");
 }
 
 static void print_results(ctl_context *c, const results *res, bool assignments) {
@@ -189,6 +225,14 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                                 ctl_json_string(&j, res->v[i].outcome);
                                 ctl_json_key(&j, "detail");
                                 ctl_json_string(&j, res->v[i].detail);
+                        } else {
+                                ctl_json_key(&j, "found_by");
+                                ctl_json_array_begin(&j);
+                                if (res->v[i].by_lss)
+                                        ctl_json_string(&j, LSSD_FOUND_BY_LSS);
+                                if (res->v[i].by_sdo)
+                                        ctl_json_string(&j, LSSD_FOUND_BY_SDO);
+                                ctl_json_array_end(&j);
                         }
                         ctl_json_object_end(&j);
                 }
@@ -197,11 +241,12 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                 return;
         }
 
-        static const char *const scan_columns[] = { "BUS", "VENDOR", "PRODUCT", "REVISION", "SERIAL", ">NODE" };
+        static const char *const scan_columns[] = { "BUS", "VENDOR", "PRODUCT", "REVISION", "SERIAL", ">NODE",
+                                                    "FOUND-BY" };
         static const char *const assign_columns[] = { "BUS", "VENDOR", "PRODUCT", "REVISION", "SERIAL", ">OLD",
                                                       ">NEW", "OUTCOME" };
         ctl_table *t;
-        if (ctl_table_new(&t, assignments ? 8 : 6, assignments ? assign_columns : scan_columns) < 0)
+        if (ctl_table_new(&t, assignments ? 8 : 7, assignments ? assign_columns : scan_columns) < 0)
                 return;
         for (size_t i = 0; i < res->n; i++) {
                 const found *f = &res->v[i];
@@ -219,6 +264,8 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                 if (assignments)
                         ctl_table_add(t, outcome_is_problem(f->outcome) ? CTL_ANSI_RED : NULL, "%s%s%s", f->outcome,
                                       f->detail[0] ? ", " : "", f->detail);
+                else
+                        ctl_table_add(t, sdo_only(f) ? CTL_ANSI_YELLOW : NULL, "%s", found_by_text(f));
         }
         if (res->n > 0)
                 ctl_table_print(t, stdout, !c->no_legend, c->colors);
@@ -228,7 +275,7 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                 if (assignments)
                         print_outcome_summary(res, c->dry_run);
                 else
-                        printf("%zu device%s found.\n", res->n, res->n == 1 ? "" : "s");
+                        print_scan_legend(c, res);
         }
         ctl_table_free(t);
 }
@@ -271,7 +318,7 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
         }
         for (size_t i = 0; i < res->n; i++) {
                 const found *f = &res->v[i];
-                ok[i] = f->new_id >= 1 && f->new_id <= 127;
+                ok[i] = f->new_id >= 1 && f->new_id <= 127 && !sdo_only(f);
                 for (size_t k = 0; k < res->n && ok[i]; k++)
                         if (k != i && res->v[k].new_id == f->new_id && strcmp(res->v[k].ifname, f->ifname) == 0)
                                 ok[i] = false;
@@ -325,7 +372,10 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
                                 continue;
                         }
                         print_map_entry(f, false, false);
-                        if (f->new_id == 0xFF)
+                        if (sdo_only(f))
+                                printf("  # found by SDO only: it does not answer LSS, so lssd cannot give it a "
+                                       "node-ID\n");
+                        else if (f->new_id == 0xFF)
                                 printf("  # non-configured (node-ID 255): give it a node-ID, then scan again\n");
                         else if (f->new_id >= 1 && f->new_id <= 127) {
                                 printf("  # WARNING: node-ID %u is answered by two devices; should not happen: "
@@ -377,6 +427,8 @@ static int scan_like(ctl_context *c, bool assign) {
                         r = append_bool_option(m, "store", false);
                 if (r >= 0 && assign && c->dry_run)
                         r = append_bool_option(m, "dry_run", true);
+                if (r >= 0 && !assign && c->no_sdo)
+                        r = append_bool_option(m, LSSD_SCAN_OPTION_SDO, false);
                 if (r >= 0 && !assign && c->has_vendor) {
                         r = sd_bus_message_append(m, "{sv}", "vendor", "u", c->vendor);
                         if (r >= 0)
@@ -419,8 +471,7 @@ static int scan_like(ctl_context *c, bool assign) {
                         goto finish;
                 }
         }
-        if (assign)
-                mark_unknown_revisions(c, &res);
+        annotate_from_objects(c, &res, !assign);
         r = 0;
         if (c->as_config)
                 r = print_config(c, &res, paths, ifnames, n);

@@ -28,6 +28,7 @@ enum {
         OPT_DRY_RUN = 1 << 11,
         OPT_RESET = 1 << 12,
         OPT_AS_CONFIG = 1 << 13,
+        OPT_NO_SDO = 1 << 14,
 };
 
 typedef struct verb {
@@ -41,8 +42,8 @@ typedef struct verb {
 static const verb verbs[] = {
         { "status", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER, true, verb_status },
         { "list", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND, true, verb_list },
-        { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR | OPT_AS_CONFIG, false,
-          verb_scan },
+        { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR | OPT_AS_CONFIG | OPT_NO_SDO,
+          false, verb_scan },
         { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false,
           verb_assign },
         { "unassign", 1, 1, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_RESET | OPT_QUIET, false, verb_unassign },
@@ -92,7 +93,8 @@ static void help(void) {
                "     --skip-missing        set-bitrate: go ahead without mapped devices the scan misses\n"
                "     --vendor ID --product ID\n"
                "                           Also look for configured slaves of this pair (scan)\n"
-               "     --as-config           Print what scan found as the buses of lssd.conf(5), a map\n\n"
+               "     --as-config           Print what scan found as the buses of lssd.conf(5), a map\n"
+               "     --no-sdo              scan: LSS only, do not ask every node-ID for its identity by SDO\n\n"
                "See the lssctl(1) man page for details and the exit codes.\n");
 }
 
@@ -111,6 +113,7 @@ enum {
         ARG_DRY_RUN,
         ARG_RESET,
         ARG_AS_CONFIG,
+        ARG_NO_SDO,
 };
 
 static const char *option_name(unsigned flag) {
@@ -129,6 +132,7 @@ static const char *option_name(unsigned flag) {
         case OPT_DRY_RUN: return "--dry-run";
         case OPT_RESET: return "--reset";
         case OPT_AS_CONFIG: return "--as-config";
+        case OPT_NO_SDO: return "--no-sdo";
         default: return "?";
         }
 }
@@ -161,6 +165,7 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 { "dry-run", no_argument, NULL, ARG_DRY_RUN },
                 { "reset", no_argument, NULL, ARG_RESET },
                 { "as-config", no_argument, NULL, ARG_AS_CONFIG },
+                { "no-sdo", no_argument, NULL, ARG_NO_SDO },
                 { "quiet", no_argument, NULL, 'q' },
                 {}
         };
@@ -235,6 +240,10 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 case ARG_RESET:
                         c->reset = true;
                         *given |= OPT_RESET;
+                        break;
+                case ARG_NO_SDO:
+                        c->no_sdo = true;
+                        *given |= OPT_NO_SDO;
                         break;
                 case ARG_AS_CONFIG:
                         c->as_config = true;

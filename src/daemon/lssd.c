@@ -28,7 +28,7 @@ static void help(void) {
                "     --queue-size N      Jobs each bus queues at most (default %u)\n"
                "     --lss-timeout MS    LSS answer timeout of the --bus buses (default %u)\n"
                "     --simulate          Simulated in-memory buses instead of SocketCAN (tests, demos)\n"
-               "     --sim-slave IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID]\n"
+               "     --sim-slave IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:canopennode]]\n"
                "                         A simulated slave on simulated bus IFACE (implies --simulate)\n",
                LSSD_DEFAULT_CONFIG, LSSD_QUEUE_MAX_DEFAULT, LSSD_LSS_TIMEOUT_MS_DEFAULT);
 }
@@ -130,8 +130,8 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                         break;
                 case ARG_SIM_SLAVE: {
                         lssd_sim_slave s;
-                        if (simbus_slave_parse(optarg, s.ifname, &s.id, &s.node_id) < 0) {
-                                log_error("Invalid --sim-slave '%s': IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID]",
+                        if (simbus_slave_parse(optarg, s.ifname, &s.id, &s.node_id, &s.canopennode) < 0) {
+                                log_error("Invalid --sim-slave '%s': IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:canopennode]]",
                                           optarg);
                                 return -EINVAL;
                         }

@@ -15,6 +15,7 @@ typedef struct lssd_sim_slave {
         char ifname[16];
         lss_identity id;
         uint8_t node_id;
+        bool canopennode;          /* behaves as a CANopenNode v4 device */
 } lssd_sim_slave;
 
 /* What the command line asked for. */

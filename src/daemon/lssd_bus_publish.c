@@ -94,7 +94,8 @@ void bus_on_engine_progress(void *userdata, double p) {
                 return;
         /* the engine's estimate can shrink when a scan finds more to do; a bar
          * never goes back, and says 100 % only when the job is over */
-        double v = ((double) b->job->stage + p) / (double) b->job->n_stages;
+        double v = b->job->type == LSSD_JOB_SCAN ? lssd_scan_progress(&b->env, b->job, p)
+                : ((double) b->job->stage + p) / (double) b->job->n_stages;
         if (v > 0.99)
                 v = 0.99;
         if (v > b->progress)

@@ -86,6 +86,7 @@ static int method_scan(sd_bus_message *m, void *userdata, sd_bus_error *error) {
         r = lssd_job_new(LSSD_JOB_SCAN, m, &j);
         if (r < 0)
                 return r;
+        j->scan_sdo = o.sdo;
         for (size_t i = 0; r >= 0 && i < lssd_bus_config_of(b)->n_devices; i++)
                 r = lssd_job_add_pair(j, lssd_bus_config_of(b)->devices[i].identity.vendor, lssd_bus_config_of(b)->devices[i].identity.product);
         if (r >= 0 && o.has_vendor)

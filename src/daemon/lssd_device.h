@@ -9,6 +9,7 @@
 #include <systemd/sd-bus.h>
 
 #include "lss/lss_proto.h"
+#include "names/lssd_names.h"
 
 typedef struct lssd_bus lssd_bus;
 typedef struct lssd_device lssd_device;
@@ -18,6 +19,11 @@ typedef struct lssd_device lssd_device;
 #define LSSD_DEVICE_CHANGED_MAPPED_NODE_ID (1u << 1)
 #define LSSD_DEVICE_CHANGED_STATE          (1u << 2)
 #define LSSD_DEVICE_CHANGED_LAST_SEEN      (1u << 3)
+#define LSSD_DEVICE_CHANGED_FOUND_BY       (1u << 4)
+
+/* How a Scan reached a device (property FoundBy, names/lssd_names.h). */
+#define LSSD_FOUND_LSS (1u << 0)  /* answered LSS (fastscan, slowscan, selective switch) */
+#define LSSD_FOUND_SDO (1u << 1)  /* answered the SDO upload of 1018h */
 
 struct lssd_device {
         lssd_bus *bus;
@@ -35,6 +41,7 @@ struct lssd_device {
         bool blocked;           /* the last auto-assign pass found its mapped node-ID taken */
         const char *state;      /* as published */
         uint64_t last_seen;     /* µs, CLOCK_REALTIME; 0 = never */
+        uint8_t found_by;       /* LSSD_FOUND_*: in the last Scan that found it; 0 = no Scan did */
         unsigned changed;       /* LSSD_DEVICE_CHANGED_* not yet signalled */
         sd_bus_slot *slot;
 };

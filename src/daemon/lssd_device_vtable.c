@@ -17,6 +17,17 @@ static int property_get_revision_known(sd_bus *bus, const char *path, const char
         return sd_bus_message_append(reply, "b", !d->revision_unknown);
 }
 
+static int property_get_found_by(sd_bus *bus, const char *path, const char *interface, const char *property,
+                                 sd_bus_message *reply, void *userdata, sd_bus_error *error) {
+        const lssd_device *d = userdata;
+        int r = sd_bus_message_open_container(reply, 'a', "s");
+        if (r >= 0 && (d->found_by & LSSD_FOUND_LSS))
+                r = sd_bus_message_append(reply, "s", LSSD_FOUND_BY_LSS);
+        if (r >= 0 && (d->found_by & LSSD_FOUND_SDO))
+                r = sd_bus_message_append(reply, "s", LSSD_FOUND_BY_SDO);
+        return r < 0 ? r : sd_bus_message_close_container(reply);
+}
+
 static int method_assign_node_id(sd_bus_message *m, void *userdata, sd_bus_error *error) {
         lssd_device *d = userdata;
         lssd_assign_options o;
@@ -50,6 +61,7 @@ const sd_bus_vtable lssd_device_vtable[] = {
                         SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("State", "s", property_get_state, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("LastSeen", "t", NULL, offsetof(lssd_device, last_seen), SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
+        SD_BUS_PROPERTY(LSSD_DEVICE_FOUND_BY, "as", property_get_found_by, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
 
         SD_BUS_METHOD_WITH_ARGS("AssignNodeId",
                                 SD_BUS_ARGS("y", node_id, "a{sv}", options),

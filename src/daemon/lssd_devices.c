@@ -106,7 +106,7 @@ void lssd_devices_refresh(lssd_devices *ds) {
                 }
         }
         for (lssd_device *d = ds->head; d; d = d->next) {
-                char *names[5];
+                char *names[6];
                 size_t n = 0;
                 if (!d->changed)
                         continue;
@@ -118,6 +118,8 @@ void lssd_devices_refresh(lssd_devices *ds) {
                         names[n++] = (char *) "State";
                 if (d->changed & LSSD_DEVICE_CHANGED_LAST_SEEN)
                         names[n++] = (char *) "LastSeen";
+                if (d->changed & LSSD_DEVICE_CHANGED_FOUND_BY)
+                        names[n++] = (char *) LSSD_DEVICE_FOUND_BY;
                 names[n] = NULL;
                 d->changed = 0;
                 if (ds->ops && ds->ops->changed)

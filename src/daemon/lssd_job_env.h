@@ -13,6 +13,7 @@
 #include "config/lssd_config.h"
 #include "daemon/lssd_devices.h"
 #include "daemon/lssd_heard.h"
+#include "daemon/lssd_job_queue.h"
 #include "lss/lss_autoassign.h"
 #include "lss/lss_master.h"
 
@@ -66,6 +67,10 @@ typedef struct lssd_job_env {
                                           * engine's wait for a boot-up after an assignment) */
         lssd_pass_record last_pass;
         uint64_t pass_started_us;        /* of the running AutoAssign, CLOCK_REALTIME */
+
+        /* how long each part of the last whole Scan with SDO took (µs;
+         * zeros: none yet): the next one's progress is weighted by them */
+        uint64_t scan_part_us[_LSSD_SCAN_PARTS];
 
         const lssd_job_env_ops *ops;
         void *userdata;

@@ -60,6 +60,7 @@ lssd_job *lssd_job_free(lssd_job *j) {
         free(j->steps);
         free(j->pairs);
         free(j->found);
+        free(j->sdo_cand);
         free(j->announced);
         free(j->map);
         free(j->br_devices);
@@ -108,18 +109,24 @@ int lssd_job_add_pair(lssd_job *j, uint32_t vendor, uint32_t product) {
         return 1;
 }
 
-int lssd_job_add_found(lssd_job *j, const lss_device *d) {
+int lssd_job_add_found_by(lssd_job *j, const lss_device *d, unsigned by) {
         for (size_t i = 0; i < j->n_found; i++)
-                if (lss_identity_equal(&j->found[i].id, &d->id)) {
-                        j->found[i].node_id = d->node_id;
+                if (lss_identity_equal(&j->found[i].dev.id, &d->id)) {
+                        if (by & LSSD_FOUND_LSS)
+                                j->found[i].dev.node_id = d->node_id;
+                        j->found[i].by |= by;
                         return 0;
                 }
-        lss_device *a = realloc(j->found, (j->n_found + 1) * sizeof(*a));
+        lssd_scan_find *a = realloc(j->found, (j->n_found + 1) * sizeof(*a));
         if (!a)
                 return -ENOMEM;
         j->found = a;
-        j->found[j->n_found++] = *d;
+        j->found[j->n_found++] = (lssd_scan_find) { .dev = *d, .by = by };
         return 1;
+}
+
+int lssd_job_add_found(lssd_job *j, const lss_device *d) {
+        return lssd_job_add_found_by(j, d, LSSD_FOUND_LSS);
 }
 
 void lssd_job_queue_init(lssd_job_queue *q, size_t max) {

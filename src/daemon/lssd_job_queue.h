@@ -10,6 +10,7 @@
 #include <stdint.h>
 #include <systemd/sd-bus.h>
 
+#include "daemon/lssd_device.h"
 #include "daemon/lssd_options.h"
 #include "daemon/lssd_raw.h"
 #include "config/lssd_config.h"
@@ -28,9 +29,18 @@ typedef enum lssd_job_type {
         _LSSD_JOB_TYPE_MAX,
 } lssd_job_type;
 
+/* The parts of a Scan, timed for the progress of the next one. */
+enum { LSSD_SCAN_PART_LSS, LSSD_SCAN_PART_SDO, LSSD_SCAN_PART_CONFIRM, _LSSD_SCAN_PARTS };
+
 typedef struct lssd_vendor_product {
         uint32_t vendor, product;
 } lssd_vendor_product;
+
+/* A device a scan found, and how (LSSD_FOUND_*). */
+typedef struct lssd_scan_find {
+        lss_device dev;
+        unsigned by;
+} lssd_scan_find;
 
 typedef struct lssd_job lssd_job;
 struct lssd_job {
@@ -61,8 +71,13 @@ struct lssd_job {
         /* SCAN */
         lssd_vendor_product *pairs;
         size_t n_pairs;
-        lss_device *found;           /* merged results of all stages */
+        lssd_scan_find *found;       /* merged results of all stages */
         size_t n_found;
+        bool scan_sdo;               /* SDO discovery and LSS confirmation after the LSS stages */
+        lss_identity *sdo_cand;      /* found by SDO only: to confirm through LSS */
+        size_t n_sdo_cand;
+        uint64_t part_started;       /* when the running stage began (the transport's clock, µs) */
+        uint64_t part_us[_LSSD_SCAN_PARTS]; /* how long each part took so far */
         lss_identity *announced;     /* DeviceFound sent (when the engine confirmed them) */
         size_t n_announced;
         bool scan_incomplete;        /* a stage failed: devices not found are not "missing" */
@@ -105,8 +120,11 @@ int lssd_job_set_plan(lssd_job *j, const lssd_bus_config *c);
 
 /* Adds a vendor/product pair to a scan job unless it is there. */
 int lssd_job_add_pair(lssd_job *j, uint32_t vendor, uint32_t product);
-/* Merges a device into a scan job's results: a later answer for the same
- * identity replaces the node-ID. */
+/* Merges a device into a scan job's results, found by `by` (LSSD_FOUND_*):
+ * a later LSS answer for the same identity replaces the node-ID (an SDO
+ * answer does not replace an LSS one). 1 when new. */
+int lssd_job_add_found_by(lssd_job *j, const lss_device *d, unsigned by);
+/* The same, found by LSS. */
 int lssd_job_add_found(lssd_job *j, const lss_device *d);
 
 typedef struct lssd_job_queue {

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "daemon/lssd_options.h"
+#include "names/lssd_names.h"
 
 static const lssd_option *option_find(const lssd_option *table, const char *key) {
         for (const lssd_option *o = table; o->key; o++)
@@ -113,11 +114,12 @@ int lssd_options_read(sd_bus_message *m, const char *argument, const lssd_option
 static const lssd_option scan_table[] = {
         LSSD_OPTION_SEEN("vendor", 'u', lssd_scan_options, vendor, has_vendor),
         LSSD_OPTION_SEEN("product", 'u', lssd_scan_options, product, has_product),
+        LSSD_OPTION(LSSD_SCAN_OPTION_SDO, 'b', lssd_scan_options, sdo),
         LSSD_OPTION_END,
 };
 
 int lssd_scan_options_read(sd_bus_message *m, lssd_scan_options *ret, sd_bus_error *error) {
-        lssd_scan_options o = { 0 };
+        lssd_scan_options o = { .sdo = true };
         int r = lssd_options_read(m, "options", scan_table, &o, error);
         if (r < 0)
                 return r;

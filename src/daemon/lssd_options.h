@@ -32,10 +32,13 @@ int lssd_options_read(sd_bus_message *m, const char *argument, const lssd_option
 /* ---- the option sets of the API ---- */
 
 /* Scan(a{sv} options): `vendor` u and `product` u (both or neither) add a
- * vendor/product pair to the slowscan. */
+ * vendor/product pair to the slowscan; `sdo` b (default true): also learn
+ * configured devices of any vendor by SDO upload of 1018h at every node-ID,
+ * then confirm them through LSS. */
 typedef struct lssd_scan_options {
         uint32_t vendor, product;
         bool has_vendor, has_product;
+        bool sdo;
 } lssd_scan_options;
 
 /* AssignNodeId(..., a{sv} options): `store` b (default true): Store

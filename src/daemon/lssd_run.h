@@ -27,6 +27,16 @@ int lssd_run_bitrate(lssd_job_env *e, lssd_job *j, const lss_result *r);
  * slowscan per vendor/product pair of j->pairs. Negative errno on failure. */
 int lssd_scan_stage_start(lssd_job_env *e, const lssd_job *j);
 
+/* Scan's SDO discovery ended with result r: its complete identities are
+ * added to the finds (by SDO), those not found by LSS become j->sdo_cand,
+ * and each node-ID that is no device is logged. Negative errno: out of
+ * memory. (lssd_run_scan_sdo.c) */
+int lssd_scan_take_sdo(lssd_job_env *e, lssd_job *j, const lss_result *r);
+
+/* A Scan's progress 0..1 while its stage j->stage is at p: stages weighted
+ * by how long the parts of the last Scan with SDO took, equal before. */
+double lssd_scan_progress(const lssd_job_env *e, const lssd_job *j, double p);
+
 /* Tells the engine how many devices an enumeration will likely find: the
  * non-configured devices seen before (for its progress). */
 void lssd_run_expect_finds(lssd_job_env *e);

@@ -73,7 +73,7 @@ static int collect_devices(lssd_job_env *e, lssd_job *j, char *unaddressable, si
 
         unaddressable[0] = 0;
         for (size_t i = 0; r >= 0 && i < j->n_found; i++)
-                r = add_device(j, &j->found[i].id, &cap);
+                r = add_device(j, &j->found[i].dev.id, &cap);
         if (j->bitrate_skip_missing || r < 0)
                 return r;
         for (lssd_device *d = e->devices->head; r >= 0 && d; d = d->next)

@@ -8,7 +8,9 @@
 #include "daemon/lssd_run.h"
 #include "daemon/lssd_log.h"
 
-/* ---- Scan: fastscan enumeration, then slowscan per vendor/product pair ---- */
+/* ---- Scan: fastscan enumeration, then slowscan per vendor/product pair;
+ * then (option sdo) SDO discovery of 1018h at every node-ID, and the
+ * confirmation through LSS of what only SDO found ---- */
 
 /* What an enumeration will likely find: the non-configured devices seen
  * before (the first scan of a bus cannot know: its progress assumes as many
@@ -35,14 +37,65 @@ int lssd_scan_stage_start(lssd_job_env *e, const lssd_job *j) {
         return lss_master_slowscan(e->engine, &range, now);
 }
 
+/* The stages after the LSS ones (0..n_pairs). */
+static unsigned sdo_stage(const lssd_job *j) {
+        return (unsigned) j->n_pairs + 1;
+}
+
+static unsigned confirm_stage(const lssd_job *j) {
+        return (unsigned) j->n_pairs + 2;
+}
+
 static int scan_start_stage(lssd_job_env *e, lssd_job *j) {
-        int k = lssd_scan_stage_start(e, j);
+        int k;
+        if (j->stage == sdo_stage(j)) {
+                lss_sdo_discover_params p = { .first = LSS_NODE_ID_MIN, .last = LSS_NODE_ID_MAX };
+                k = lss_master_sdo_discover(e->engine, &p, lssd_job_env_now(e));
+        } else if (j->stage == confirm_stage(j))
+                k = lss_master_confirm(e->engine, j->sdo_cand, j->n_sdo_cand, lssd_job_env_now(e));
+        else
+                k = lssd_scan_stage_start(e, j);
         return k < 0 ? lssd_job_start_failed(e, j, k) : 1;
 }
 
+static unsigned scan_part(const lssd_job *j) {
+        return j->stage < sdo_stage(j) ? LSSD_SCAN_PART_LSS
+                : j->stage == sdo_stage(j) ? LSSD_SCAN_PART_SDO : LSSD_SCAN_PART_CONFIRM;
+}
+
+/* The stage ended (or the job): its time counts for its part. */
+static void scan_part_end(lssd_job_env *e, lssd_job *j) {
+        uint64_t now = lssd_job_env_now(e);
+        j->part_us[scan_part(j)] += now - j->part_started;
+        j->part_started = now;
+}
+
+double lssd_scan_progress(const lssd_job_env *e, const lssd_job *j, double p) {
+        const uint64_t *w = e->scan_part_us;
+        double total = (double) w[LSSD_SCAN_PART_LSS] + (double) w[LSSD_SCAN_PART_SDO] +
+                       (double) w[LSSD_SCAN_PART_CONFIRM];
+        if (!j->scan_sdo || total <= 0)
+                return ((double) j->stage + p) / (double) j->n_stages;
+        unsigned part = scan_part(j);
+        double within = part == LSSD_SCAN_PART_LSS ? ((double) j->stage + p) / (double) (j->n_pairs + 1) : p;
+        double before = 0;
+        for (unsigned k = 0; k < part; k++)
+                before += (double) w[k];
+        return (before + within * (double) w[part]) / total;
+}
+
+/* Whether stage j->stage (just ended) has a successor to start. */
+static bool scan_more_stages(const lssd_job *j) {
+        if (j->stage < (unsigned) j->n_pairs)
+                return true;
+        if (!j->scan_sdo)
+                return false;
+        return j->stage < sdo_stage(j) || (j->stage == sdo_stage(j) && j->n_sdo_cand > 0);
+}
+
 static int compare_devices(const void *a, const void *b) {
-        const lss_device *x = a, *y = b;
-        return lss_identity_compare(&x->id, &y->id);
+        const lssd_scan_find *x = a, *y = b;
+        return lss_identity_compare(&x->dev.id, &y->dev.id);
 }
 
 static bool scan_covers(const lssd_job *j, const lssd_device *d) {
@@ -57,7 +110,7 @@ static bool scan_covers(const lssd_job *j, const lssd_device *d) {
 
 /* The device object of a device the scan found, brought up to date
  * (created when new); NULL when it could not be recorded. */
-static lssd_device *scan_record(lssd_job_env *e, const lss_device *f, uint64_t now_realtime) {
+static lssd_device *scan_record(lssd_job_env *e, const lss_device *f, unsigned by, uint64_t now_realtime) {
         lssd_device *d = NULL;
         char ident[40];
         int k = lssd_devices_get(e->devices, &f->id, true, f->node_id, lssd_realtime_us(), &d);
@@ -71,6 +124,10 @@ static lssd_device *scan_record(lssd_job_env *e, const lss_device *f, uint64_t n
                 d->node_id = f->node_id;
                 d->assigned = false;
                 d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
+        }
+        if (d->found_by != by) {
+                d->found_by = (uint8_t) by;
+                d->changed |= LSSD_DEVICE_CHANGED_FOUND_BY;
         }
         d->missing = false;
         d->last_seen = now_realtime;
@@ -106,7 +163,9 @@ static void scan_announce(lssd_job_env *e, lssd_job *j, const lss_device *f, con
 void lssd_scan_found(lssd_job_env *e, lssd_job *j, const lss_device *f) {
         if (scan_announced(j, &f->id))
                 return; /* by an earlier stage: the end brings its node-ID up to date */
-        lssd_device *d = scan_record(e, f, lssd_realtime_us());
+        /* the confirmation stage confirms what SDO found */
+        unsigned by = LSSD_FOUND_LSS | (j->scan_sdo && j->stage == confirm_stage(j) ? LSSD_FOUND_SDO : 0);
+        lssd_device *d = scan_record(e, f, by, lssd_realtime_us());
         if (!d)
                 return; /* tried again at the end */
         lssd_devices_refresh(e->devices);
@@ -119,23 +178,24 @@ static void scan_publish(lssd_job_env *e, lssd_job *j, uint64_t now_realtime) {
                 for (lssd_device *d = e->devices->head; d; d = d->next) {
                         bool found = false;
                         for (size_t i = 0; i < j->n_found && !found; i++)
-                                found = lss_identity_equal(&j->found[i].id, &d->id);
+                                found = lss_identity_equal(&j->found[i].dev.id, &d->id);
                         if (!found && !d->missing && scan_covers(j, d))
                                 d->missing = true;
                 }
 
         /* Devices announced when they were found are up to date, unless a
-         * later stage read another node-ID; the others are recorded now. */
+         * later stage read another node-ID or found them another way too;
+         * the others are recorded now. */
         for (size_t i = 0; i < j->n_found; i++) {
-                const lss_device *f = &j->found[i];
+                const lss_device *f = &j->found[i].dev;
                 const lssd_device *d = lssd_devices_find(e->devices, &f->id);
-                if (!scan_announced(j, &f->id) || !d || d->node_id != f->node_id)
-                        (void) scan_record(e, f, now_realtime);
+                if (!scan_announced(j, &f->id) || !d || d->node_id != f->node_id || d->found_by != j->found[i].by)
+                        (void) scan_record(e, f, j->found[i].by, now_realtime);
         }
         lssd_devices_refresh(e->devices);
 
         for (size_t i = 0; i < j->n_found; i++) {
-                const lss_device *f = &j->found[i];
+                const lss_device *f = &j->found[i].dev;
                 if (!scan_announced(j, &f->id))
                         scan_announce(e, j, f, lssd_devices_find(e->devices, &f->id));
         }
@@ -148,21 +208,27 @@ static void scan_log(lssd_job_env *e, lssd_job *j) {
                                j->n_found == 1 ? "" : "s");
         for (size_t i = 0; i < j->n_found && n < sizeof(line); i++) {
                 char ident[40];
-                lssd_identity_format(&j->found[i].id, ident, sizeof(ident));
-                if (j->found[i].node_id == LSS_NODE_ID_UNCONFIGURED)
+                const lss_device *d = &j->found[i].dev;
+                lssd_identity_format(&d->id, ident, sizeof(ident));
+                if (d->node_id == LSS_NODE_ID_UNCONFIGURED)
                         n += (size_t) snprintf(line + n, sizeof(line) - n, "%s %s non-configured", i ? "," : ":",
                                                ident);
                 else
-                        n += (size_t) snprintf(line + n, sizeof(line) - n, "%s %s node %u", i ? "," : ":", ident,
-                                               j->found[i].node_id);
+                        n += (size_t) snprintf(line + n, sizeof(line) - n, "%s %s node %u%s", i ? "," : ":", ident,
+                                               d->node_id, j->found[i].by & LSSD_FOUND_LSS ? "" : " (SDO only)");
         }
         log_info("%s", line);
         for (size_t i = 0; i < j->n_found; i++) {
                 char ident[40];
-                const lss_device *d = &j->found[i];
+                const lss_device *d = &j->found[i].dev;
                 lssd_identity_format(&d->id, ident, sizeof(ident));
-                lssd_log_device(LOG_DEBUG, e->ifname, &d->id, d->node_id, "%s: found %s node %u", e->ifname, ident,
-                                d->node_id);
+                lssd_log_device(LOG_DEBUG, e->ifname, &d->id, d->node_id, "%s: found %s node %u%s%s", e->ifname,
+                                ident, d->node_id, j->found[i].by & LSSD_FOUND_LSS ? " by LSS" : "",
+                                j->found[i].by & LSSD_FOUND_SDO ? " by SDO" : "");
+                if (!(j->found[i].by & LSSD_FOUND_LSS))
+                        lssd_log_device(LOG_NOTICE, e->ifname, &d->id, d->node_id,
+                                        "%s: Scan: %s answers SDO at node %u but not LSS (selective switch): "
+                                        "reported as SDO found it, not confirmed", e->ifname, ident, d->node_id);
                 if (d->aside_node_id)
                         lssd_log_device(LOG_INFO, e->ifname, &d->id, d->node_id,
                                         "%s: Scan set %s aside with the volatile node-ID %u while it went on, then "
@@ -173,7 +239,8 @@ static void scan_log(lssd_job_env *e, lssd_job *j) {
 
 int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (!r) {
-                j->n_stages = (unsigned) j->n_pairs + 1;
+                j->n_stages = (unsigned) j->n_pairs + 1 + (j->scan_sdo ? 2 : 0);
+                j->part_started = lssd_job_env_now(e);
                 return scan_start_stage(e, j);
         }
 
@@ -182,6 +249,10 @@ int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                         j->scan_incomplete = true;
                         break;
                 }
+        if (j->scan_sdo && j->stage == sdo_stage(j) && r->status == LSS_OK && lssd_scan_take_sdo(e, j, r) < 0) {
+                log_error("%s: Scan: out of memory for the devices SDO found", e->ifname);
+                j->scan_incomplete = true;
+        }
 
         if (r->status != LSS_OK) {
                 sd_bus_error err = SD_BUS_ERROR_NULL;
@@ -195,8 +266,13 @@ int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 return 0;
         }
 
-        if (++j->stage <= j->n_pairs)
+        scan_part_end(e, j);
+        if (scan_more_stages(j)) {
+                j->stage++;
                 return scan_start_stage(e, j);
+        }
+        if (j->scan_sdo && !j->scan_incomplete)
+                memcpy(e->scan_part_us, j->part_us, sizeof(e->scan_part_us));
 
         if (j->n_found > 1) /* found is NULL when nothing was found, and qsort's pointer is nonnull */
                 qsort(j->found, j->n_found, sizeof(*j->found), compare_devices);
@@ -211,7 +287,7 @@ int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (k >= 0)
                 k = sd_bus_message_open_container(reply, 'a', "(uuuuy)");
         for (size_t i = 0; k >= 0 && i < j->n_found; i++) {
-                const lss_device *f = &j->found[i];
+                const lss_device *f = &j->found[i].dev;
                 k = sd_bus_message_append(reply, "(uuuuy)", f->id.vendor, f->id.product, f->id.revision, f->id.serial,
                                           f->node_id);
         }

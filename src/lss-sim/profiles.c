@@ -38,9 +38,7 @@ static const sim_profile profiles[] = {
                 .summary = "CANopenNode v4 device: no identify services, Configure Bit Timing ignored, "
                            "answers every Fastscan in configuration state",
                 .default_node_id = LSS_NODE_ID_UNCONFIGURED,
-                .no_identify = true,
-                .canopennode_lss = true,
-                .bit_timing_silent = true,
+                .canopennode = true,
         },
 };
 
@@ -61,10 +59,10 @@ const sim_profile *sim_profile_find(const char *name) {
 }
 
 void sim_profile_faults(const sim_profile *p, lss_slave_faults *f) {
-        lss_slave_faults_default(f);
+        if (p->canopennode)
+                lss_slave_faults_canopennode(f);
+        else
+                lss_slave_faults_default(f);
         f->needs_nmt_stopped = p->needs_nmt_stopped;
-        f->no_identify = p->no_identify;
-        f->canopennode_lss = p->canopennode_lss;
-        f->bit_timing_silent = p->bit_timing_silent;
         f->bit_index_unsupported = p->bit_index_unsupported;
 }

@@ -19,9 +19,7 @@ typedef struct sim_profile {
         uint8_t default_node_id;
         /* deviations from a plain CiA 305 slave */
         bool needs_nmt_stopped;
-        bool no_identify;
-        bool canopennode_lss;
-        bool bit_timing_silent;
+        bool canopennode;          /* lss_slave_faults_canopennode() */
         uint32_t bit_index_unsupported;
 } sim_profile;
 

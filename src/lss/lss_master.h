@@ -257,6 +257,14 @@ uint64_t lss_enumerate_deadline_us(const lss_timing_config *c);
  * each verified by selective switch and asked its node-ID; all back in waiting. */
 int lss_master_slowscan(lss_master *m, const lss_identify_range *r, uint64_t now);
 
+/* Confirms identities learnt another way (SDO discovery) through LSS
+ * (lss_confirm.c): for each, everybody to waiting, selective switch and
+ * Inquire Node-ID, each asked again while nobody answers. result.devices:
+ * those that answered, with the node-ID they answered (announced as found);
+ * an identity nobody answers is left out, not a failure. All back in
+ * waiting. `ids` is copied. */
+int lss_master_confirm(lss_master *m, const lss_identity *ids, size_t n, uint64_t now);
+
 enum lss_assign_flags {
         LSS_ASSIGN_STORE = 1u << 0,  /* Store Configuration after configuring */
         LSS_ASSIGN_VERIFY = 1u << 1, /* wait for the boot-up at the new node-ID */

@@ -18,6 +18,14 @@
 #define LSSD_BUS_IFACE      LSSD_BUS_NAME ".Bus"
 #define LSSD_DEVICE_IFACE   LSSD_BUS_NAME ".Device"
 
+/* Device property FoundBy (as): how the last Scan that found the device
+ * reached it, any of these */
+#define LSSD_DEVICE_FOUND_BY "FoundBy"
+#define LSSD_FOUND_BY_LSS    "lss"   /* it answered LSS: fastscan, slowscan, selective switch */
+#define LSSD_FOUND_BY_SDO    "sdo"   /* it answered the SDO upload of its identity (1018h) */
+/* Scan option (b, default true): also ask every node-ID 1..127 for 1018h by SDO */
+#define LSSD_SCAN_OPTION_SDO "sdo"
+
 #define LSSD_ERROR_PREFIX          LSSD_BUS_NAME ".Error."
 #define LSSD_ERROR_NO_RESPONSE     LSSD_ERROR_PREFIX "NoResponse"
 #define LSSD_ERROR_REJECTED        LSSD_ERROR_PREFIX "Rejected"

@@ -17,6 +17,13 @@ void lss_slave_faults_default(lss_slave_faults *f) {
         f->early_config = SLAVE_EARLY_NONE;
 }
 
+void lss_slave_faults_canopennode(lss_slave_faults *f) {
+        lss_slave_faults_default(f);
+        f->no_identify = true;
+        f->canopennode_lss = true;
+        f->bit_timing_silent = true;
+}
+
 void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8_t bit_index,
                     const lss_slave_faults *faults, uint64_t seed, lss_slave_emit_fn emit, void *userdata) {
         memset(s, 0, sizeof(*s));

@@ -65,6 +65,10 @@ typedef struct lss_slave_faults {
 } lss_slave_faults;
 
 void lss_slave_faults_default(lss_slave_faults *f);
+/* The defaults plus the ways of a CANopenNode v4 device (lss-sim --profile
+ * canopennode, lssd --sim-slave ...:canopennode): no identify services,
+ * Configure Bit Timing ignored, any Fastscan answered in configuration. */
+void lss_slave_faults_canopennode(lss_slave_faults *f);
 
 /* Persistent and volatile state; lss-sim writes it to the state files. */
 typedef struct lss_slave_state {

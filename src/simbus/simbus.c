@@ -111,9 +111,12 @@ int simbus_new(uint32_t bitrate, simbus **ret) {
         return 0;
 }
 
-int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id) {
+int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id, bool canopennode) {
         lss_slave_faults faults;
-        lss_slave_faults_default(&faults);
+        if (canopennode)
+                lss_slave_faults_canopennode(&faults);
+        else
+                lss_slave_faults_default(&faults);
         /* a little latency, as real slaves have */
         faults.latency_us = 500;
         catch_up(s);
@@ -146,17 +149,22 @@ static int parse_u32(const char *s, uint32_t *ret) {
         return 0;
 }
 
-int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id) {
-        char buf[128], *fields[7];
+int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id, bool *canopennode) {
+        char buf[128], *fields[8];
         size_t n = 0;
 
         if (!spec || strlen(spec) >= sizeof(buf))
                 return -EINVAL;
         strcpy(buf, spec);
-        for (char *p = buf, *save = NULL, *t; n < 7 && (t = strtok_r(p, ":", &save)); p = NULL)
+        for (char *p = buf, *save = NULL, *t; n < 8 && (t = strtok_r(p, ":", &save)); p = NULL)
                 fields[n++] = t;
-        if (n < 5 || n > 6 || strlen(fields[0]) > 15)
+        if (n < 5 || n > 7 || strlen(fields[0]) > 15)
                 return -EINVAL;
+        *canopennode = n == 7;
+        if (n == 7 && strcmp(fields[6], "canopennode") != 0)
+                return -EINVAL;
+        if (n == 7)
+                n = 6;
 
         uint32_t v[5] = { 0, 0, 0, 0, LSS_NODE_ID_UNCONFIGURED };
         for (size_t i = 1; i < n; i++)

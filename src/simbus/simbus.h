@@ -6,6 +6,7 @@
  * moves the simulated host controller to the new rate; its link is always up. */
 #pragma once
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "can/transport.h"
@@ -14,11 +15,11 @@
 typedef struct simbus simbus;
 
 int simbus_new(uint32_t bitrate, simbus **ret);
-/* node_id 1..127 or 0xFF. */
-int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id);
+/* node_id 1..127 or 0xFF; canopennode: lss_slave_faults_canopennode(). */
+int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id, bool canopennode);
 /* The simulated bus as a transport; the transport's close() frees it. */
 void simbus_transport(simbus *s, lss_transport *ret);
 
-/* Parses "IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID]" (numbers in C
- * notation, NODEID absent = 0xFF). -EINVAL if malformed. */
-int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id);
+/* Parses "IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:canopennode]]"
+ * (numbers in C notation, NODEID absent = 0xFF). -EINVAL if malformed. */
+int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id, bool *canopennode);

@@ -247,16 +247,29 @@ def test_scan():
         found = ctl.ok('scan', '--json').json
         expect_eq([(d['bus'], d['vendor'], d['product'], d['revision'], d['serial'], d['node_id']) for d in found],
                   sorted([('vcan0',) + s.identity + (s.node_id,) for s in SLAVES]), 'scan --json')
-        expect_eq(list(found[0]), ['bus', 'vendor', 'product', 'revision', 'serial', 'node_id'], 'scan keys')
+        expect_eq(list(found[0]), ['bus', 'vendor', 'product', 'revision', 'serial', 'node_id', 'found_by'],
+                  'scan keys')
+        # configured: found by SDO and by LSS (the map's pairs); non-configured: by LSS
+        expect_eq([(d['serial'], d['found_by']) for d in found],
+                  [(s.serial, ['lss', 'sdo'] if s.node_id != 0xFF else ['lss']) for s in sorted(SLAVES, key=lambda s: s.identity)],
+                  'scan --json found_by')
         text = ctl.ok('scan').out
         expect('4 devices found.' in text and '0x80002468' in text, 'scan text: ' + text)
+        expect('FOUND-BY' in text and 'lss,sdo' in text, 'scan text, FOUND-BY column: ' + text)
+        expect('Not looked for: configured devices in NMT Stopped' in text, 'scan legend: ' + text)
         expect_eq(len(ctl.ok('list', '--json').json), 4, 'devices after scan')
-    # no map: configured slaves only with --vendor/--product
+    # no map: every slave (SDO finds the configured ones); with --no-sdo
+    # configured ones only with --vendor/--product
     with Env({'vcan0': SLAVES[:3]}) as env:
         ctl = Ctl(env)
-        expect_eq(len(ctl.ok('scan', '--json').json), 1, 'scan without a map')
-        found = ctl.ok('scan', '--json', '--vendor', '0x9A', '--product', '3').json
-        expect_eq([d['serial'] for d in found], [17, 0x1276], 'scan --vendor 0x9A --product 3')
+        expect_eq(len(ctl.ok('scan', '--json', '--no-sdo').json), 1, 'scan --no-sdo without a map')
+        text = ctl.ok('scan', '--no-sdo').out
+        expect('Not looked for (--no-sdo): configured devices of vendor/product pairs not in the map' in text,
+               'scan --no-sdo legend: ' + text)
+        found = ctl.ok('scan', '--json', '--no-sdo', '--vendor', '0x9A', '--product', '3').json
+        expect_eq([d['serial'] for d in found], [17, 0x1276], 'scan --no-sdo --vendor 0x9A --product 3')
+        found = ctl.ok('scan', '--json').json
+        expect_eq(sorted(d['serial'] for d in found), sorted(s.serial for s in SLAVES[:3]), 'scan without a map')
         ctl.fails('usage', '--vendor and --product go together', 'scan', '--vendor', '0x9A')
 
 
@@ -268,7 +281,10 @@ def test_scan_config():
     configured = [Slave(0xEC, 0x1234, 0x00010002, 0x1001, 5), Slave(0xEC, 0x1234, 0x00010002, 0x1002, 6),
                   Slave(0xEC, 0x1234, 0x00010003, 0x80001003, 7)]
     fresh = Slave(0xEC, 0x1234, 0x00010002, 0x1004)
-    with Env({'vcan0': configured + [fresh]}, candump=True) as env:
+    # lss-sim only: answers SDO, ignores Switch State Selective (vendor): found by SDO alone
+    real = os.environ.get('LSSD_TEST_BACKEND', 'vcan') != 'simulate'
+    sdo_only = [Slave(0x6006, 1, 1, 0x66, 9, faults=['ignore-cs=0x40'])] if real else []
+    with Env({'vcan0': configured + [fresh] + sdo_only}, candump=True) as env:
         ctl = Ctl(env)
         ctl.fails('usage', '--as-config does not go with --json', 'scan', '--as-config', '--json')
         ctl.fails('usage', "--as-config does not go with 'list'", 'list', '--as-config')
@@ -276,15 +292,18 @@ def test_scan_config():
         env.step('lssctl scan --as-config:\n' + out)
         lines = out.splitlines()
         expect(lines[0].startswith("# lssd.conf(5) buses as found by 'lssctl scan --as-config'"), 'header: %r' % out)
-        expect('3 devices mapped at their current node-IDs, 1 commented out (see there), on vcan0.' in out,
-               'header counts: %r' % out)
+        expect('3 devices mapped at their current node-IDs, %d commented out (see there), on vcan0.'
+               % (1 + len(sdo_only)) in out, 'header counts: %r' % out)
         entry = '{ vendor = 0x%08x; product = 0x%08x; revision = 0x%08x; serial = 0x%08x; node_id = %s; }'
         active = [x.strip().rstrip(',') for x in lines if x.strip().startswith('{ vendor')]
         expect_eq(active, [entry % (s.identity + (s.node_id,)) for s in configured], 'one map line per device')
         commented = [x.strip() for x in lines if x.strip().startswith('# { vendor')]
-        expect_eq(commented, ['# ' + entry % (fresh.identity + ('N',)) +
-                              '  # non-configured (node-ID 255): give it a node-ID, then scan again'],
-                  'the non-configured device, commented out')
+        # by node-ID: the one found by SDO only (9) before the non-configured one
+        expect_eq(commented, ['# ' + entry % (s.identity + (s.node_id,)) + '  # found by SDO only: it does not '
+                              'answer LSS, so lssd cannot give it a node-ID' for s in sdo_only] +
+                  ['# ' + entry % (fresh.identity + ('N',)) +
+                   '  # non-configured (node-ID 255): give it a node-ID, then scan again'],
+                  'the non-configured device and the one found by SDO only, commented out')
         expect('interface = "vcan0";' in out and 'bitrate = 125000;' in out, 'the bus: %r' % out)
 
         path = os.path.join(env.dir, 'frozen.conf')
@@ -512,7 +531,8 @@ def test_assign_taken():
     foreign = Slave(0x1ABC, 0x99, 1, 0x77, 12)
     with Env({'vcan0': SLAVES + [foreign]}, config=CONFIG % '', candump=True) as env:
         ctl = Ctl(env)
-        scan_all(env)
+        # LSS only: the SDO pass of a plain Scan would make the foreign device known
+        env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 1, 'sdo', 'b', 'false')
         dev0 = device_path('vcan0', *SLAVES[0].identity)
 
         def untouched(what):
@@ -523,6 +543,11 @@ def test_assign_taken():
         ctl.fails('conflict', 'Node-ID 12 is taken on vcan0: a device lssd does not know answered an SDO '
                   'request just now as node 12. Nothing was changed', 'assign', '0x1276', '12')
         untouched('assign onto a device lssd does not know')
+        # a plain Scan finds it by SDO: then lssd names it
+        scan_all(env)
+        ctl.fails('conflict', 'Node-ID 12 is taken on vcan0: device 00001abc:00000099:00000001:00000077 has it',
+                  'assign', '0x1276', '12')
+        untouched('assign onto a device found by SDO')
         ctl.fails('conflict', 'Node-ID 6 is taken on vcan0: device 000000ec:00001234:00010002:80002468 has '
                   'it', 'assign', '0x1276', '6')
         untouched('assign onto a known device')

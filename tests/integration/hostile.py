@@ -348,7 +348,7 @@ def default_value(sig):
         return True
     if sig == 'd':
         return 0.5
-    if sig == 'ao':
+    if sig in ('ao', 'as'):
         return []
     if sig == 'o':
         return '/'

@@ -97,10 +97,13 @@ def auto_assign(env, ifname='vcan0', options=(0,)):
 
 
 class Slave:
-    def __init__(self, vendor, product, revision, serial, node_id=0xFF, faults=()):
+    def __init__(self, vendor, product, revision, serial, node_id=0xFF, faults=(), profile=None):
         self.vendor, self.product, self.revision, self.serial = vendor, product, revision, serial
         self.node_id = node_id
         self.faults = list(faults)
+        # an lss-sim profile: 'canopennode' (the only one lssd --simulate
+        # knows too), or None for the lss-sim process's own
+        self.profile = profile
 
     @property
     def identity(self):
@@ -109,6 +112,10 @@ class Slave:
     def spec(self):
         s = '0x%x:0x%x:0x%x:0x%x' % self.identity
         return s + (':%d' % self.node_id if self.node_id != 0xFF else '')
+
+    def sim_spec(self):
+        """lssd --sim-slave's form (after IFACE:), which names the profile."""
+        return self.spec() + ((':' if self.node_id != 0xFF else ':0xff:') + self.profile if self.profile else '')
 
 
 class BusctlResult:
@@ -199,7 +206,12 @@ class Env:
         if self.real:
             for ifname, slaves in self.slaves.items():
                 if ifname not in self.absent:
-                    self._start_sim(ifname, slaves)
+                    self._start_sim(ifname, [s for s in slaves if not s.profile])
+                    # slaves of another profile: an lss-sim process of that profile each
+                    for profile in sorted({s.profile for s in slaves if s.profile}):
+                        self._start_sim(ifname, [s for s in slaves if s.profile == profile],
+                                        key='%s+%s' % (ifname, profile),
+                                        args=self.sim_args + ['--profile', profile])
             for i, (ifname, slaves, args) in enumerate(self.more_sims):
                 self._start_sim(ifname, slaves, key='%s+%d' % (ifname, i + 1), args=args)
         if self.want_lssd:
@@ -294,7 +306,7 @@ class Env:
             cmd += ['--simulate']
             for ifname, slaves in self.slaves.items():
                 for s in slaves:
-                    cmd += ['--sim-slave', ifname + ':' + s.spec()]
+                    cmd += ['--sim-slave', ifname + ':' + s.sim_spec()]
         cmd += self.lssd_args
         env = dict(os.environ, DBUS_SYSTEM_BUS_ADDRESS=self.address)
         env.setdefault('LSSD_LOG_LEVEL', 'debug')

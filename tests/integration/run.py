@@ -206,15 +206,19 @@ def test_scan():
 
 
 def test_scan_options():
-    # no map: only non-configured slaves, unless the call names a vendor/product pair
+    # no map, LSS only (sdo false): only non-configured slaves, unless the
+    # call names a vendor/product pair; with SDO (the default) every slave
     with Env({'vcan0': SLAVES[:3]}) as env:
         slaves = SLAVES[:3]
-        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)[0]
+        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 1, 'sdo', 'b', 'false')[0]
         expect_eq(sorted(found), sorted([list(s.identity) + [255] for s in slaves if s.node_id == 0xFF]),
-                  'Scan without map')
-        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 2, 'vendor', 'u', 0x9A, 'product', 'u', 3)[0]
+                  'Scan without map, sdo false')
+        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 3, 'vendor', 'u', 0x9A, 'product', 'u', 3,
+                         'sdo', 'b', 'false')[0]
         want = [list(s.identity) + [s.node_id] for s in slaves if s.vendor == 0x9A or s.node_id == 0xFF]
-        expect_eq(sorted(found), sorted(want), 'Scan with vendor/product 0x9A/3')
+        expect_eq(sorted(found), sorted(want), 'Scan with vendor/product 0x9A/3, sdo false')
+        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)[0]
+        expect_eq(sorted(found), sorted(list(s.identity) + [s.node_id] for s in slaves), 'Scan without map')
         for s in slaves:
             if s.vendor == 0x9A:
                 expect_eq(env.get(dev('vcan0', s), DEVICE_IFACE, 'State'), 'configured' if s.node_id != 0xFF
@@ -222,10 +226,71 @@ def test_scan_options():
         if env.real:
             # the 0x9A slave is gone: a scan covering 0x9A/3 misses it
             env.restart_sim('vcan0', [x for x in slaves if x.vendor != 0x9A])
-            found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 2, 'vendor', 'u', 0x9A, 'product', 'u', 3)[0]
+            found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 3, 'vendor', 'u', 0x9A, 'product', 'u', 3,
+                             'sdo', 'b', 'false')[0]
             expect_eq(len(found), len([x for x in slaves if x.vendor != 0x9A and x.node_id == 0xFF]),
                       'devices after the power cycle')
             expect_eq(env.get(dev('vcan0', SLAVES[2]), DEVICE_IFACE, 'State'), 'missing', 'State of a gone slave')
+
+
+def test_scan_sdo():
+    """Scan with no options finds every device (issue 18): configured devices
+    of three vendors the map does not name (found by SDO upload of 1018h,
+    confirmed through LSS), non-configured ones (fastscan), and a CANopenNode
+    v4 device configured and one not, each with its identity, node-ID and
+    FoundBy; option sdo=false: only what LSS alone finds. On lss-sim also a
+    device that answers SDO but not the selective switch (FoundBy sdo only)
+    and one in NMT Stopped sending heartbeats (not a device: a journal line
+    says how to find it)."""
+    configured = [Slave(0x1001, 1, 1, 0x11, 20), Slave(0x2002, 7, 3, 0x22, 21), Slave(0x3003, 9, 2, 0x33, 127)]
+    non_configured = [Slave(0xEC, 0x1234, 0x00010002, 0x1276), Slave(0x4004, 2, 1, 0x44)]
+    canopennode = [Slave(0x5005, 0x11, 1, 0x55, 42, profile='canopennode'),
+                   Slave(0x5005, 0x11, 1, 0x56, profile='canopennode')]
+    slaves = configured + non_configured + canopennode
+    real = os.environ.get('LSSD_TEST_BACKEND', 'vcan') != 'simulate'
+    # lss-sim only: ignores Switch State Selective (vendor), answers SDO
+    sdo_only = [Slave(0x6006, 1, 1, 0x66, 60, faults=['ignore-cs=0x40'])] if real else []
+    stopped = Slave(0x7007, 1, 1, 0x77, 70)
+    more = [('vcan0', [stopped], ['--nmt-state', 'stopped', '--heartbeat', '100'])] if real else []
+    by = {s.serial: ['lss', 'sdo'] for s in configured + canopennode[:1]}
+    by.update({s.serial: ['lss'] for s in non_configured + canopennode[1:]})
+    by.update({s.serial: ['sdo'] for s in sdo_only})
+    with Env({'vcan0': slaves + sdo_only}, config=CONFIG % '', more_sims=more) as env:
+        c = env.connect()
+        lssd_signals(c)
+        # LSS alone: the non-configured ones; the configured vendors are not in the map
+        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 1, 'sdo', 'b', 'false')[0]
+        want = sorted(list(s.identity) + [s.node_id] for s in non_configured + canopennode[1:])
+        expect_eq(sorted(found), want, 'Scan with sdo=false')
+        for s in non_configured + canopennode[1:]:
+            expect_eq(env.get(dev('vcan0', s), DEVICE_IFACE, 'FoundBy'), ['lss'], 'FoundBy of %x' % s.serial)
+
+        expect(c.wait_signal(lambda m: m.member == 'JobFinished'), 'no JobFinished of the first Scan')
+        with c.lock:
+            c.signals.clear()
+        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)[0]
+        want = sorted(list(s.identity) + [s.node_id] for s in slaves + sdo_only)
+        expect_eq(sorted(found), want, 'Scan with no options')
+        expect_eq(found, sorted(found), 'Scan result order')
+        for s in slaves + sdo_only:
+            path = dev('vcan0', s)
+            expect_eq(env.get(path, DEVICE_IFACE, 'NodeId'), s.node_id, 'NodeId of %x' % s.serial)
+            expect_eq(env.get(path, DEVICE_IFACE, 'FoundBy'), by[s.serial], 'FoundBy of %x' % s.serial)
+        done = c.wait_signal(lambda m: m.member == 'JobFinished' and m.body == ['Scan', 'done'])
+        expect(done, 'no JobFinished of the Scan')
+        with c.lock:
+            signals = list(c.signals)
+        unknown = sorted(tuple(m.body) for m in signals if m.member == 'UnknownDevice')
+        expect_eq(unknown, sorted(s.identity for s in slaves + sdo_only if s.serial != 0x1276),
+                  'one UnknownDevice per device not in the map')
+        if real:
+            expect('node 70 sends heartbeats in NMT Stopped' in env.lssd_output(),
+                   'no journal line about the stopped node 70')
+            # nothing changed on the slaves, all in waiting
+            for s in slaves + sdo_only:
+                st = env.slave_state('vcan0', s.serial)
+                expect_eq((st.get('lss_state'), int(st['active_node_id'])), ('waiting', s.node_id),
+                          'state of %x' % s.serial)
 
 
 # ---- assigning ----
@@ -1192,6 +1257,7 @@ TESTS = {
     'properties': test_properties,
     'scan': test_scan,
     'scan-options': test_scan_options,
+    'scan-sdo': test_scan_sdo,
     'assign': test_assign,
     'unassign': test_unassign,
     'autoassign': test_autoassign,

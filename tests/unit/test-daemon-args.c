@@ -117,6 +117,20 @@ START_TEST(options_scan) {
         test_message(bus, m, "a{sv}", 0);
         ck_assert_int_eq(lssd_scan_options_read(m, &o, &e), 0);
         ck_assert(!o.has_vendor && !o.has_product);
+        ck_assert(o.sdo); /* SDO discovery unless turned off */
+        m = sd_bus_message_unref(m);
+
+        test_message(bus, m, "a{sv}", 1, LSSD_SCAN_OPTION_SDO, "b", 0);
+        ck_assert_int_eq(lssd_scan_options_read(m, &o, &e), 0);
+        ck_assert(!o.sdo);
+        m = sd_bus_message_unref(m);
+
+        /* sdo is a b */
+        test_message(bus, m, "a{sv}", 1, LSSD_SCAN_OPTION_SDO, "u", 0u);
+        ck_assert_int_lt(lssd_scan_options_read(m, &o, &e), 0);
+        ck_assert_invalid_args(&e);
+        ck_assert_message_has(&e, "'b', not 'u'");
+        sd_bus_error_free(&e);
         m = sd_bus_message_unref(m);
 
         test_message(bus, m, "a{sv}", 2, "vendor", "u", 0xECu, "product", "u", 0x1234u);

@@ -108,10 +108,21 @@ START_TEST(scan_bookkeeping) {
         d.node_id = 5; /* slowscan knows better than fastscan */
         ck_assert_int_eq(lssd_job_add_found(j, &d), 0);
         ck_assert_uint_eq(j->n_found, 1);
-        ck_assert_uint_eq(j->found[0].node_id, 5);
+        ck_assert_uint_eq(j->found[0].dev.node_id, 5);
+        ck_assert_uint_eq(j->found[0].by, LSSD_FOUND_LSS);
+        /* SDO at another node-ID: found that way too, the LSS answer stays */
+        d.node_id = 9;
+        ck_assert_int_eq(lssd_job_add_found_by(j, &d, LSSD_FOUND_SDO), 0);
+        ck_assert_uint_eq(j->found[0].dev.node_id, 5);
+        ck_assert_uint_eq(j->found[0].by, LSSD_FOUND_LSS | LSSD_FOUND_SDO);
         d.id.serial++;
-        ck_assert_int_eq(lssd_job_add_found(j, &d), 1);
+        ck_assert_int_eq(lssd_job_add_found_by(j, &d, LSSD_FOUND_SDO), 1);
         ck_assert_uint_eq(j->n_found, 2);
+        /* found by SDO, then confirmed through LSS: the LSS answer counts */
+        d.node_id = 10;
+        ck_assert_int_eq(lssd_job_add_found(j, &d), 0);
+        ck_assert_uint_eq(j->found[1].dev.node_id, 10);
+        ck_assert_uint_eq(j->found[1].by, LSSD_FOUND_LSS | LSSD_FOUND_SDO);
 
         /* a raw job is named after its service */
         lssd_job *raw = job(LSSD_JOB_RAW);
@@ -200,21 +211,29 @@ START_TEST(sim_slave_spec) {
         char ifname[16];
         lss_identity id;
         uint8_t node;
-        ck_assert_int_eq(simbus_slave_parse("vcan0:0xEC:0x1234:1:0x80001276", ifname, &id, &node), 0);
+        bool co;
+        ck_assert_int_eq(simbus_slave_parse("vcan0:0xEC:0x1234:1:0x80001276", ifname, &id, &node, &co), 0);
         ck_assert_str_eq(ifname, "vcan0");
         ck_assert_uint_eq(id.vendor, 0xEC);
         ck_assert_uint_eq(id.serial, 0x80001276u);
         ck_assert_uint_eq(node, 0xFF);
-        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:127", ifname, &id, &node), 0);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:127", ifname, &id, &node, &co), 0);
         ck_assert_uint_eq(node, 127);
-        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:255", ifname, &id, &node), 0);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:255", ifname, &id, &node, &co), 0);
         ck_assert_uint_eq(node, 0xFF);
-        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:0", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:6", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:0x100000000", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:-1", ifname, &id, &node), -EINVAL);
-        ck_assert_int_eq(simbus_slave_parse("0123456789abcdef:1:2:3:4", ifname, &id, &node), -EINVAL);
+        ck_assert(!co);
+        /* a CANopenNode v4 device */
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:0xff:canopennode", ifname, &id, &node, &co), 0);
+        ck_assert_uint_eq(node, 0xFF);
+        ck_assert(co);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:plain", ifname, &id, &node, &co), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:canopennode:x", ifname, &id, &node, &co), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:0", ifname, &id, &node, &co), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3", ifname, &id, &node, &co), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:6", ifname, &id, &node, &co), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:0x100000000", ifname, &id, &node, &co), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:-1", ifname, &id, &node, &co), -EINVAL);
+        ck_assert_int_eq(simbus_slave_parse("0123456789abcdef:1:2:3:4", ifname, &id, &node, &co), -EINVAL);
 }
 END_TEST
 
