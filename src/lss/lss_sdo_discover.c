@@ -24,8 +24,11 @@
  *   - Boot-ups, heartbeats and SDO answers to other clients are recorded as
  *     heard, at any node-ID.
  * It writes no object and sends no NMT command. Waits: the engine's timing
- * rules (lss_timing.h) on latencies measured on SDO answers only; first
- * contact (sub-index 1) waits the full limit, like an LSS discovery step. */
+ * rules (lss_timing.h) on latencies measured on SDO answers. First contact
+ * (sub-index 1) needs no full wait of its own, since an answer names what it
+ * answers and a late one reopens its node-ID: it waits like any step once
+ * an SDO answer (or, before, an LSS answer of this host) was timed, else a
+ * quarter of the limit; the pass ends with one full wait for the late. */
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
@@ -108,6 +111,15 @@ static void note_written(lss_master *m, lss_sdo_state *s) {
                 s->last_wire_at = written;
 }
 
+/* How long a first-contact request waits (see the top of the file). */
+static uint32_t first_contact_wait(const lss_master *m, const lss_sdo_state *s) {
+        if (s->timing.n_samples > 0)
+                return lss_timing_wait(&s->timing, false);
+        if (m->timing.n_samples > 0)
+                return lss_timing_wait(&m->timing, false);
+        return lss_timing_limit(&s->timing) / 4;
+}
+
 static bool send_request(lss_master *m, lss_sdo_state *s, uint8_t node) {
         sdo_slot *sl = &s->slot[node];
         lss_frame f = { .id = SDO_RX_BASE + node, .len = 8,
@@ -122,7 +134,7 @@ static bool send_request(lss_master *m, lss_sdo_state *s, uint8_t node) {
         sl->sent_at = m->now;
         sl->wire_at = start + frame_us;
         s->last_wire_at = sl->wire_at + frame_us;
-        sl->deadline = sl->wire_at + lss_timing_wait(&s->timing, sl->sub == 1);
+        sl->deadline = sl->wire_at + (sl->sub == 1 ? first_contact_wait(m, s) : lss_timing_wait(&s->timing, false));
         if (sl->asked_at[sl->sub] == NO_TIME)
                 sl->asked_at[sl->sub] = m->now;
         else
