@@ -2,7 +2,9 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
 """Footprint of lssd on vcan0: RSS after start and after a Scan of 127 slaves,
 wakeups per second while idle (no watchdog, then WATCHDOG_USEC = 30 s as
-systemd's WatchdogSec=30 sets it), each over --idle seconds.
+systemd's WatchdogSec=30 sets it), each over --idle seconds. And a Scan of
+127 configured slaves (node-IDs 1..127, no map: found by SDO 1018h, then
+confirmed through LSS) against the bus floor of the SDO requests it sent.
 
     footprint.py [--idle 30] [--slaves 127] [--no-scan] [--simulate]
 
@@ -51,11 +53,40 @@ def idle(env, seconds):
     return {'seconds': seconds, 'wakeups': w1 - w0, 'per_s': (w1 - w0) / seconds, 'cpu_s': cpu1 - cpu0}
 
 
+def configured_scan(n):
+    """A Scan with no options of n configured slaves (node-IDs 1..n, not in
+    the map): the time, and the bus floor of the SDO requests (0x600 + node)
+    candump saw meanwhile."""
+    from lssdtest import BUS_IFACE, SERVICE, Env, Slave, bus_path
+    slaves = bl.identities(n, 4343)
+    with Env({IFNAME: [Slave(*s, node_id=i + 1) for i, s in enumerate(slaves)]}, config=CONFIG,
+             sim_args=bl.SIM_ARGS, candump=True) as env:
+        c = env.connect()
+        t_from, t0 = time.time(), time.monotonic()
+        found = c.call(SERVICE, bus_path(IFNAME), BUS_IFACE, 'Scan', 'a{sv}', [{}], timeout=3600)[0]
+        elapsed, t_to = time.monotonic() - t0, time.time()
+        time.sleep(0.3)  # candump writes the last frames
+        frames = bl.read_candump(env.candump_path, IFNAME, t_from, t_to)
+        sdo = [f for f in frames if 0x601 <= f[1] <= 0x67F]
+        r = {'elapsed_s': elapsed, 'found': len(found), 'sdo_requests': len(sdo),
+             'sdo_floor_s': bl.frame_stats(sdo)['floor_s'], 'all': bl.frame_stats(frames)}
+        want = sorted(s + (i + 1,) for i, s in enumerate(slaves))
+        if sorted(tuple(f[:5]) for f in found) != want:
+            r['failed'] = 'footprint: Scan of %d configured slaves found %d, or wrong node-IDs' % (n, len(found))
+            bl.log('!!!! ' + r['failed'])
+            bl.record_failure(r['failed'])
+        bl.log('configured Scan: %r' % r)
+        c.close()
+        env.conns.remove(c)
+    return r
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument('--idle', type=float, default=30.0)
     ap.add_argument('--slaves', type=int, default=127)
     ap.add_argument('--no-scan', action='store_true')
+    ap.add_argument('--no-configured-scan', action='store_true')
     ap.add_argument('--simulate', action='store_true')
     a = ap.parse_args()
     os.environ['LSSD_TEST_BACKEND'] = 'simulate' if a.simulate else 'vcan'
@@ -93,6 +124,9 @@ def main():
             c.close()
             env.conns.remove(c)
 
+    if not a.no_scan and not a.no_configured_scan and not a.simulate:
+        out['configured_scan'] = configured_scan(a.slaves)
+
     # systemd's WatchdogSec=30 passes WATCHDOG_USEC (and WATCHDOG_PID, which
     # would name the service's main PID; unset, sd_watchdog_enabled() accepts)
     os.environ['WATCHDOG_USEC'] = '30000000'
@@ -113,7 +147,7 @@ def main():
     finally:
         del os.environ['WATCHDOG_USEC']
     bl.save('footprint-' + ('sim' if a.simulate else 'vcan'), out)
-    return 1 if 'failed' in out.get('scan', {}) else 0
+    return 1 if 'failed' in out.get('scan', {}) or 'failed' in out.get('configured_scan', {}) else 0
 
 
 if __name__ == '__main__':

@@ -312,6 +312,12 @@ def main():
             print('%-34s %.1f s, lssd CPU %.2f s (%s)%s' % (
                 'Scan of %d slaves' % fp['slaves'], fp['scan']['elapsed_s'], fp['scan']['cpu_s'],
                 fp['scan']['options'], ' !!!! ' + fp['scan']['failed'] if 'failed' in fp['scan'] else ''))
+        cs = fp.get('configured_scan')
+        if cs:
+            print('%-34s %.1f s: %d found; its %d SDO requests on the bus: floor %.2f s (x %.1f)%s' % (
+                'Scan of %d configured slaves' % fp['slaves'], cs['elapsed_s'], cs['found'], cs['sdo_requests'],
+                cs['sdo_floor_s'], cs['elapsed_s'] / cs['sdo_floor_s'] if cs['sdo_floor_s'] else 0,
+                ' !!!! ' + cs['failed'] if 'failed' in cs else ''))
         for k, label in (('idle_no_watchdog', 'no watchdog'), ('idle_watchdog_30s', 'WATCHDOG_USEC=30 s')):
             i = fp[k]
             print('%-34s %d in %.0f s = %.3f/s (CPU %.2f s)%s' % (
