@@ -9,6 +9,7 @@
 
 #include "lss/lss_autoassign.h"
 #include "lss/lss_internal.h"
+#include "lss/lss_replace.h"
 
 /* The second look: waits this many times the configured timeout (or twice
  * the slowest answer seen, when that is longer), up to a second. */
@@ -28,6 +29,11 @@ typedef struct lss_aa_state {
         uint32_t vp[2];         /* vendor/product pair being enumerated */
         size_t pair;
         int entry;              /* map entry of the device being handled, -1 none */
+        int replacing;          /* missing map entry whose node-ID it gets, -1 none */
+        lss_device *cand;       /* kept for the replacement rule (lss_replace.h) */
+        size_t n_cand, cap_cand;
+        lss_replace_verdict *verdict; /* per candidate, while `deciding` */
+        bool deciding;          /* handle_found() is given the candidates, with their verdicts */
         bool changed;
         uint8_t target;
         enum lss_service *failed_at; /* per map entry: the service its first look failed at */
@@ -49,7 +55,8 @@ typedef struct lss_aa_state {
 const char *lss_outcome_name(enum lss_outcome_kind k) {
         static const char *const names[] = {
                 [LSS_OUTCOME_UNCHANGED] = "unchanged", [LSS_OUTCOME_ASSIGNED] = "assigned",
-                [LSS_OUTCOME_POOL] = "pool",           [LSS_OUTCOME_UNKNOWN] = "unknown",
+                [LSS_OUTCOME_POOL] = "pool",           [LSS_OUTCOME_REPLACED] = "replaced",
+        [LSS_OUTCOME_UNKNOWN] = "unknown",
                 [LSS_OUTCOME_MISSING] = "missing",     [LSS_OUTCOME_CONFLICT] = "conflict",
                 [LSS_OUTCOME_FAILED] = "failed",
         };
@@ -64,6 +71,8 @@ void lss_autoassign_free_state(lss_master *m) {
         free(m->aa->failed_at);
         free(m->aa->todo);
         free(m->aa->out);
+        free(m->aa->cand);
+        free(m->aa->verdict);
         free(m->aa);
         m->aa = NULL;
 }
@@ -72,7 +81,8 @@ void lss_autoassign_free_state(lss_master *m) {
 static size_t count_given(const lss_aa_state *s) {
         size_t n = 0;
         for (size_t i = 0; i < s->n_out; i++)
-                n += s->out[i].kind == LSS_OUTCOME_ASSIGNED || s->out[i].kind == LSS_OUTCOME_POOL;
+                n += s->out[i].kind == LSS_OUTCOME_ASSIGNED || s->out[i].kind == LSS_OUTCOME_POOL ||
+                     s->out[i].kind == LSS_OUTCOME_REPLACED;
         return n;
 }
 
@@ -135,8 +145,9 @@ static uint8_t pool_next(const lss_aa_state *s) {
         return 0;
 }
 
-/* Turn the result of an assignment into the device's outcome. */
-static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool pool) {
+/* Turn the result of an assignment into the device's outcome; `given`: its
+ * kind when the device got a node-ID (assigned, pool, replaced). */
+static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, enum lss_outcome_kind given) {
         const lss_result *r = &m->result;
         int e = lookup(s->plan, id);
         if (e >= 0 && r->status != LSS_OK && !s->patient)
@@ -148,7 +159,7 @@ static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool 
         o->status = r->status;
         snprintf(o->message, sizeof(o->message), "%s", r->message);
         if (r->status == LSS_OK) {
-                o->kind = !r->changed ? LSS_OUTCOME_UNCHANGED : pool ? LSS_OUTCOME_POOL : LSS_OUTCOME_ASSIGNED;
+                o->kind = !r->changed && given != LSS_OUTCOME_REPLACED ? LSS_OUTCOME_UNCHANGED : given;
                 o->new_node_id = s->target;
                 o->not_stored = r->not_stored;
                 o->err = r->err;
@@ -168,7 +179,7 @@ static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool 
         if (s->patient && r->status == LSS_OK && e >= 0 && s->first[e].kind != LSS_OUTCOME_MISSING &&
             s->first[e].old_node_id != 0 && s->first[e].old_node_id != s->target) {
                 /* the first look changed it before it fell silent: this pass assigned it */
-                o->kind = pool ? LSS_OUTCOME_POOL : LSS_OUTCOME_ASSIGNED;
+                o->kind = given;
                 o->old_node_id = s->first[e].old_node_id;
         }
         if (s->patient && r->status != LSS_E_NOT_FOUND && !o->message[0])
@@ -226,36 +237,80 @@ static bool stops(const lss_aa_state *s) {
         return s->plan->nmt_stop && !s->plan->dry_run;
 }
 
+/* The outcome of a found device that gets no node-ID. */
+static void leave_alone(lss_aa_state *s, const lss_device *d, enum lss_outcome_kind kind, enum lss_status st,
+                        const char *why) {
+        lss_outcome *o = outcome_add(s, &d->id);
+        if (!o)
+                return;
+        o->kind = kind;
+        o->status = st;
+        o->old_node_id = o->new_node_id = d->node_id;
+        snprintf(o->message, sizeof(o->message), "%s", why);
+}
+
+/* A candidate of the replacement rule waits for the end of the pass. */
+static int cand_keep(lss_aa_state *s, const lss_device *d) {
+        for (size_t i = 0; i < s->n_cand; i++)
+                if (lss_identity_equal(&s->cand[i].id, &d->id))
+                        return 0; /* found again by a later scan */
+        if (s->n_cand == s->cap_cand) {
+                size_t cap = s->cap_cand ? s->cap_cand * 2 : 4;
+                lss_device *c = realloc(s->cand, cap * sizeof(*c));
+                if (c)
+                        s->cand = c;
+                lss_replace_verdict *v = c ? realloc(s->verdict, cap * sizeof(*v)) : NULL;
+                if (!v)
+                        return -ENOMEM;
+                s->verdict = v;
+                s->cap_cand = cap;
+        }
+        s->cand[s->n_cand++] = *d;
+        return 0;
+}
+
+/* Which node-ID the found device todo[t] gets (s->target, s->entry,
+ * s->replacing); false: none, its outcome is recorded or it is kept for the
+ * replacement rule. */
+static bool choose_target(lss_aa_state *s) {
+        const lss_device *d = &s->todo[s->t];
+        const lss_replace_verdict *v = s->deciding ? &s->verdict[s->t] : NULL;
+        s->replacing = -1;
+        s->entry = lookup(s->plan, &d->id);
+        if (s->entry >= 0) {
+                s->handled[s->entry] = true;
+                s->target = s->plan->map[s->entry].node_id;
+                return true;
+        }
+        if (v && v->entry >= 0) {
+                s->replacing = v->entry;
+                s->target = s->plan->map[v->entry].node_id;
+                return true;
+        }
+        if (v && v->ambiguous) {
+                leave_alone(s, d, LSS_OUTCOME_UNKNOWN, LSS_OK, v->why);
+                return false;
+        }
+        /* decided before the pool could take it */
+        if (!v && lss_replace_candidate(s->plan, s->handled, d) && cand_keep(s, d) == 0)
+                return false;
+        if (s->plan->unknown == LSS_UNKNOWN_POOL && d->node_id == LSS_NODE_ID_UNCONFIGURED) {
+                s->target = pool_next(s);
+                if (s->target != 0)
+                        return true;
+                leave_alone(s, d, LSS_OUTCOME_FAILED, LSS_E_INVALID, "the pool is exhausted");
+                return false;
+        }
+        leave_alone(s, d, LSS_OUTCOME_UNKNOWN, LSS_OK, "");
+        return false;
+}
+
 /* Handle the devices in `todo` (full identities, found by a scan). */
 static int handle_found(lss_master *m, lss_aa_state *s) {
         PT_BEGIN(&s->i_pc);
         for (s->t = 0; s->t < s->n_todo; s->t++) {
-                if (already_handled(s, &s->todo[s->t].id))
+                if (already_handled(s, &s->todo[s->t].id) || !choose_target(s))
                         continue;
-                s->entry = lookup(s->plan, &s->todo[s->t].id);
-                if (s->entry >= 0) {
-                        s->handled[s->entry] = true;
-                        s->target = s->plan->map[s->entry].node_id;
-                } else if (s->plan->unknown == LSS_UNKNOWN_POOL && s->todo[s->t].node_id == LSS_NODE_ID_UNCONFIGURED) {
-                        s->target = pool_next(s);
-                        if (s->target == 0) {
-                                lss_outcome *o = outcome_add(s, &s->todo[s->t].id);
-                                if (o) {
-                                        o->kind = LSS_OUTCOME_FAILED;
-                                        o->status = LSS_E_INVALID;
-                                        o->old_node_id = o->new_node_id = s->todo[s->t].node_id;
-                                        snprintf(o->message, sizeof(o->message), "the pool is exhausted");
-                                }
-                                continue;
-                        }
-                } else {
-                        lss_outcome *o = outcome_add(s, &s->todo[s->t].id);
-                        if (o) {
-                                o->kind = LSS_OUTCOME_UNKNOWN;
-                                o->old_node_id = o->new_node_id = s->todo[s->t].node_id;
-                        }
-                        continue;
-                }
                 for (;;) {
                         memset(&m->as, 0, sizeof(m->as));
                         m->as.id = s->todo[s->t].id;
@@ -266,7 +321,7 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                         m->as.unstored = unstored_now(s);
                         PT_CALL(&s->i_pc, proc_assign(m, &m->as));
                         /* a pool ID somebody already answers to: take the next one */
-                        if (s->entry < 0 && m->result.in_use) {
+                        if (s->entry < 0 && s->replacing < 0 && m->result.in_use) {
                                 s->used[s->target] = true;
                                 m->result.status = LSS_OK;
                                 m->result.in_use = false;
@@ -279,7 +334,13 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                 }
                 s->changed = m->result.changed;
                 moved(s, m);
-                record(m, s, &s->todo[s->t].id, s->entry < 0);
+                record(m, s, &s->todo[s->t].id, s->replacing >= 0 ? LSS_OUTCOME_REPLACED :
+                                                 s->entry < 0 ? LSS_OUTCOME_POOL : LSS_OUTCOME_ASSIGNED);
+                if (s->replacing >= 0) {
+                        lss_outcome *o = outcome_add(s, &s->todo[s->t].id);
+                        if (o)
+                                lss_replace_note(s->plan, s->replacing, o, s->out, s->n_out);
+                }
                 if (s->changed && stops(s)) {
                         /* the verifying reset took them out of Stopped */
                         STEP_REQUEST(m, &s->i_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
@@ -310,7 +371,7 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                         s->handled[s->i] = true;
                         s->changed = m->result.changed;
                         moved(s, m);
-                        record(m, s, &s->plan->map[s->i].id, false);
+                        record(m, s, &s->plan->map[s->i].id, LSS_OUTCOME_ASSIGNED);
                         if (s->changed && stops(s)) {
                                 /* the verifying reset took them out of Stopped */
                                 STEP_REQUEST(m, &s->d_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
@@ -494,6 +555,24 @@ static int proc_autoassign(lss_master *m) {
                                                  "asked again with waits of %u ms", m->stats.patient_wait_us / 1000);
                         }
                 }
+
+        /* 6. the replacement rule (lss_replace.h), now that the pass knows
+         * what is missing: the candidates take the place of the found ones */
+        if (s->n_cand > 0) {
+                lss_device *t = s->todo;
+                size_t cap = s->cap_todo;
+                s->todo = s->cand;
+                s->n_todo = s->n_cand;
+                s->cap_todo = s->cap_cand;
+                s->cand = t;
+                s->cap_cand = cap;
+                s->n_cand = 0;
+                lss_replace_decide(s->plan, s->out, s->n_out, s->todo, s->n_todo, s->verdict);
+                s->deciding = true;
+                s->i_pc = 0;
+                PT_CALL(&s->pc, handle_found(m, s));
+                s->deciding = false;
+        }
         STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
         m->result.status = LSS_OK;
         if (s->failed != LSS_OK)
