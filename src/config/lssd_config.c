@@ -101,10 +101,10 @@ const char *lssd_bus_config_describe(const lssd_bus_config *b, char *buf, size_t
 
         snprintf(buf, size,
                  "%s: %" PRIu32 " bit/s, %zu mapped device%s, auto-assign %s, store %s, "
-                 "unknown devices: %s, nmt-stop %s, bit-rate change %s, LSS timeout %" PRIu32 " ms (%s)",
+                 "unknown devices: %s, nmt-stop %s, replace %s, bit-rate change %s, LSS timeout %" PRIu32 " ms (%s)",
                  b->interface, b->bitrate, b->n_devices, b->n_devices == 1 ? "" : "s",
                  b->auto_assign ? "on" : "off", b->store ? "on" : "off", unknown,
-                 b->nmt_stop ? "on" : "off", b->bitrate_change ? "allowed" : "off",
+                 b->nmt_stop ? "on" : "off", b->replace ? "on" : "off", b->bitrate_change ? "allowed" : "off",
                  b->lss_timeout_ms, lssd_lss_timing_to_string(b->lss_timing));
         return buf;
 }

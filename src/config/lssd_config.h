@@ -56,6 +56,7 @@ typedef struct lssd_bus_config {
         bool auto_assign;            /* run the assignment pass at start */
         bool store;                  /* Store Configuration after assigning */
         bool nmt_stop;               /* NMT Stop all before LSS */
+        bool replace;                /* AutoAssign gives a missing device's node-ID to its replacement */
         bool bitrate_change;         /* daemon may retune the host interface (CAP_NET_ADMIN) */
         lssd_unknown_policy unknown;
         uint8_t pool_lo, pool_hi;    /* 1..127, lo <= hi; 0/0 when no pool given */

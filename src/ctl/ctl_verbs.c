@@ -11,6 +11,7 @@
 #include "ctl/ctl_errors.h"
 #include "ctl/ctl_job.h"
 #include "ctl/ctl_json.h"
+#include "ctl/ctl_map_entry.h"
 #include "ctl/ctl_objects.h"
 #include "ctl/ctl_parse.h"
 #include "ctl/ctl_show.h"
@@ -61,7 +62,7 @@ static bool outcome_is_problem(const char *outcome) {
 }
 
 static bool outcome_is_change(const char *outcome) {
-        return strcmp(outcome, "assigned") == 0 || strcmp(outcome, "pool") == 0 ||
+        return strcmp(outcome, "assigned") == 0 || strcmp(outcome, "pool") == 0 || strcmp(outcome, "replaced") == 0 ||
                strncmp(outcome, "would-", strlen("would-")) == 0;
 }
 
@@ -110,8 +111,8 @@ static int append_bool_option(sd_bus_message *m, const char *key, bool value) {
 
 /* auto-assign: the count of each outcome, and each problem on stderr */
 static void print_outcome_summary(const results *res, bool dry_run) {
-        static const char *const kinds[] = { "assigned", "pool", "unchanged", "unknown", "missing", "conflict",
-                                             "failed" };
+        static const char *const kinds[] = { "assigned", "pool", "replaced", "unchanged", "unknown", "missing",
+                                             "conflict", "failed" };
         size_t changed = 0;
         for (size_t i = 0; i < res->n; i++)
                 changed += outcome_is_change(res->v[i].outcome);
@@ -269,6 +270,9 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
         }
         if (res->n > 0)
                 ctl_table_print(t, stdout, !c->no_legend, c->colors);
+        for (size_t i = 0; assignments && i < res->n; i++)
+                ctl_print_replacement(res->v[i].ifname, res->v[i].id, res->v[i].new_id, res->v[i].outcome,
+                                      res->v[i].detail);
         if (!c->no_legend) {
                 if (res->n > 0)
                         putchar('\n');
@@ -282,14 +286,7 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
 
 /* scan --as-config: one device of a map line, 0x%08x as lssd.conf(5) shows them */
 static void print_map_entry(const found *f, bool active, bool comma) {
-        printf("      %s{ vendor = 0x%08" PRIx32 "; product = 0x%08" PRIx32 "; revision = 0x%08" PRIx32
-               "; serial = 0x%08" PRIx32 "; node_id = ", active ? "" : "# ", f->id[0], f->id[1], f->id[2], f->id[3]);
-        if (f->new_id >= 1 && f->new_id <= 127)
-                printf("%u; }", f->new_id);
-        else
-                printf("N; }");
-        if (comma)
-                putchar(',');
+        ctl_print_map_entry(f->id, f->new_id, active, comma);
 }
 
 static int compare_by_node_id(const void *a, const void *b) {

@@ -398,6 +398,8 @@ const sd_bus_vtable lssd_bus_vtable[] = {
         SD_BUS_SIGNAL_WITH_ARGS("NodeIdAssigned", SD_BUS_ARGS("o", device, "y", old, "y", new), 0),
         SD_BUS_SIGNAL_WITH_ARGS("UnknownDevice",
                                 SD_BUS_ARGS("u", vendor, "u", product, "u", revision, "u", serial), 0),
+        SD_BUS_SIGNAL_WITH_ARGS("DeviceReplaced",
+                                SD_BUS_ARGS("(uuuu)", old, "(uuuu)", new, "y", node_id), 0),
         SD_BUS_SIGNAL_WITH_ARGS("JobFinished", SD_BUS_ARGS("s", job, "s", result), 0),
 
         SD_BUS_VTABLE_END

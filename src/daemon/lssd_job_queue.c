@@ -93,6 +93,7 @@ int lssd_job_set_plan(lssd_job *j, const lssd_bus_config *c) {
                 .pool_hi = c->pool_hi,
                 .store = c->store,
                 .nmt_stop = c->nmt_stop,
+                .replace = c->replace,
         };
         return 0;
 }

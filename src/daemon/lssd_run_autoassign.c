@@ -61,7 +61,9 @@ static void autoassign_publish_one(lssd_job_env *e, const lssd_job *j, const lss
                 d->node_id = o->new_node_id;
                 d->changed |= LSSD_DEVICE_CHANGED_NODE_ID;
         }
-        if (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL) {
+        /* a replacement is not in the map (MappedNodeId 0) until the map
+         * is updated: "assigned", as by AssignNodeId */
+        if (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL || o->kind == LSS_OUTCOME_REPLACED) {
                 d->assigned = true;
                 d->pooled = o->kind == LSS_OUTCOME_POOL;
         }
@@ -73,24 +75,38 @@ static void autoassign_publish_one(lssd_job_env *e, const lssd_job *j, const lss
         }
 }
 
+/* An identity for people; a map entry's without a revision has "-" there. */
+static const char *identity_format(const lss_identity *id, bool revision_known, char *buf, size_t size) {
+        if (revision_known)
+                return lssd_identity_format(id, buf, size);
+        snprintf(buf, size, "%08x:%08x:-:%08x", id->vendor, id->product, id->serial);
+        return buf;
+}
+
 /* What an outcome needs said beyond its kind ("" when nothing): the
  * journal line and the reply's detail. */
 static void outcome_detail(const lss_outcome *o, char *buf, size_t size) {
-        buf[0] = '\0';
+        char old[40], stored[80] = "";
         if (o->not_stored)
-                snprintf(buf, size, "not stored (device cannot store: %s)", lss_store_error_name(o->err));
-        else if (o->message[0])
-                snprintf(buf, size, "%s", o->message);
+                snprintf(stored, sizeof(stored), "not stored (device cannot store: %s)", lss_store_error_name(o->err));
+        if (o->kind == LSS_OUTCOME_REPLACED)
+                snprintf(buf, size, "%s %s (missing)%s%s", o->dry ? "would replace" : "replaced",
+                         identity_format(&o->replaced, o->replaced_revision_known, old, sizeof(old)),
+                         stored[0] ? ", " : "", stored);
+        else
+                snprintf(buf, size, "%s", stored[0] ? stored : o->message);
 }
 
 static bool outcome_changed(const lss_outcome *o) {
-        return (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL) && !o->dry;
+        return (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL || o->kind == LSS_OUTCOME_REPLACED) &&
+               !o->dry;
 }
 
 /* The reply's and the journal's name: a dry run's changes are "would-..." */
 static const char *outcome_name(const lss_outcome *o) {
         if (o->dry)
-                return o->kind == LSS_OUTCOME_POOL ? "would-pool" : "would-assign";
+                return o->kind == LSS_OUTCOME_POOL ? "would-pool" :
+                       o->kind == LSS_OUTCOME_REPLACED ? "would-replace" : "would-assign";
         return lss_outcome_name(o->kind);
 }
 
@@ -98,13 +114,12 @@ static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_out
         char ident[40], detail[200];
         int priority = LOG_INFO;
 
-        if (outcome_revision_known(j, o))
-                lssd_identity_format(&o->id, ident, sizeof(ident));
-        else /* the map's identity without a revision: not 0 */
-                snprintf(ident, sizeof(ident), "%08x:%08x:-:%08x", o->id.vendor, o->id.product, o->id.serial);
+        /* the map's identity without a revision: not 0 */
+        identity_format(&o->id, outcome_revision_known(j, o), ident, sizeof(ident));
         switch (o->kind) {
         case LSS_OUTCOME_ASSIGNED:
         case LSS_OUTCOME_POOL:
+        case LSS_OUTCOME_REPLACED:
                 priority = LOG_NOTICE;
                 break;
         case LSS_OUTCOME_MISSING:
@@ -118,7 +133,14 @@ static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_out
         outcome_detail(o, detail, sizeof(detail));
         lssd_log_device(priority, e->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s%s",
                         e->ifname, ident, outcome_name(o), o->old_node_id, o->new_node_id,
-                        !detail[0] ? "" : o->not_stored ? ", " : ": ", detail);
+                        !detail[0] ? "" : o->not_stored && o->kind != LSS_OUTCOME_REPLACED ? ", " : ": ", detail);
+        if (o->kind == LSS_OUTCOME_REPLACED && !o->dry) {
+                char old[40];
+                lssd_log_device(LOG_NOTICE, e->ifname, &o->id, o->new_node_id,
+                                "%s: %s replaced %s (missing) at node-ID %u: update the map entry", e->ifname, ident,
+                                identity_format(&o->replaced, o->replaced_revision_known, old, sizeof(old)),
+                                o->new_node_id);
+        }
 }
 
 int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
@@ -170,6 +192,11 @@ int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                         else if (o->kind == LSS_OUTCOME_UNKNOWN)
                                 (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu",
                                                           o->id.vendor, o->id.product, o->id.revision, o->id.serial);
+                        if (o->kind == LSS_OUTCOME_REPLACED && !o->dry)
+                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "DeviceReplaced", "(uuuu)(uuuu)y",
+                                                          o->replaced.vendor, o->replaced.product,
+                                                          o->replaced.revision, o->replaced.serial, o->id.vendor,
+                                                          o->id.product, o->id.revision, o->id.serial, o->new_node_id);
                 }
 
         /* a dry run is not the bus's last pass */
@@ -189,9 +216,9 @@ int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 e->ops->last_pass_changed(e->userdata);
 
         snprintf(j->summary, sizeof(j->summary),
-                 "%s: %zu %sassigned, %zu from the pool, %zu unchanged, %zu unknown, %zu missing, %zu conflicts, "
-                 "%zu failed", e->ifname, count[LSS_OUTCOME_ASSIGNED], j->plan.dry_run ? "would be " : "",
-                 count[LSS_OUTCOME_POOL],
+                 "%s: %zu %sassigned, %zu from the pool, %zu replaced, %zu unchanged, %zu unknown, %zu missing, "
+                 "%zu conflicts, %zu failed", e->ifname, count[LSS_OUTCOME_ASSIGNED], j->plan.dry_run ? "would be " : "",
+                 count[LSS_OUTCOME_POOL], count[LSS_OUTCOME_REPLACED],
                  count[LSS_OUTCOME_UNCHANGED], count[LSS_OUTCOME_UNKNOWN], count[LSS_OUTCOME_MISSING],
                  count[LSS_OUTCOME_CONFLICT], count[LSS_OUTCOME_FAILED]);
 

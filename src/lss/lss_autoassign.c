@@ -7,54 +7,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lss/lss_autoassign.h"
-#include "lss/lss_internal.h"
+#include "lss/lss_autoassign_state.h"
+#include "lss/lss_replace.h"
 
 /* The second look: waits this many times the configured timeout (or twice
  * the slowest answer seen, when that is longer), up to a second. */
 #define PATIENT_FACTOR 4u
 #define PATIENT_MAX_US 1000000u
-
-typedef struct lss_aa_state {
-        int pc, i_pc, d_pc;
-        lss_timing_config timing;  /* the configured timing, kept during the second look */
-        bool patient;              /* the second look runs */
-        lss_outcome *first;        /* per map entry: its outcome before the second look (kind MISSING: none) */
-        const lss_autoassign_plan *plan;
-        bool *handled;          /* per map entry: seen on the bus */
-        bool used[128];         /* node-IDs known to be taken */
-        lss_device *todo;       /* devices found by a scan, still to handle */
-        size_t n_todo, cap_todo, t, i;
-        uint32_t vp[2];         /* vendor/product pair being enumerated */
-        size_t pair;
-        int entry;              /* map entry of the device being handled, -1 none */
-        bool changed;
-        uint8_t target;
-        enum lss_service *failed_at; /* per map entry: the service its first look failed at */
-        bool restore[128];      /* node-IDs the second look must store again (a first look
-                                 * silent after Configure Node-ID or at Store) */
-        bool unstored[128];     /* those and the caller's, as they are now */
-        bool taken[128];        /* answered the SDO probe at the start (before an NMT Stop) */
-        bool free[128];         /* silent to it, and nobody assigned there since */
-        lss_probe_state probe;
-        lss_outcome *out;
-        size_t n_out, cap_out;
-        size_t given_before;    /* node-IDs given before the current blind enumeration */
-        unsigned blind_passes;
-        bool avoid[128];        /* node-IDs an enumeration may not set a slave aside with */
-        enum lss_status failed; /* an enumeration met a slave that does not follow CiA 305 */
-        char failed_msg[160];
-} lss_aa_state;
-
-const char *lss_outcome_name(enum lss_outcome_kind k) {
-        static const char *const names[] = {
-                [LSS_OUTCOME_UNCHANGED] = "unchanged", [LSS_OUTCOME_ASSIGNED] = "assigned",
-                [LSS_OUTCOME_POOL] = "pool",           [LSS_OUTCOME_UNKNOWN] = "unknown",
-                [LSS_OUTCOME_MISSING] = "missing",     [LSS_OUTCOME_CONFLICT] = "conflict",
-                [LSS_OUTCOME_FAILED] = "failed",
-        };
-        return (unsigned) k < sizeof(names) / sizeof(names[0]) ? names[k] : "unknown";
-}
 
 void lss_autoassign_free_state(lss_master *m) {
         if (!m->aa)
@@ -64,52 +23,10 @@ void lss_autoassign_free_state(lss_master *m) {
         free(m->aa->failed_at);
         free(m->aa->todo);
         free(m->aa->out);
+        free(m->aa->cand);
+        free(m->aa->verdict);
         free(m->aa);
         m->aa = NULL;
-}
-
-/* How many devices this pass gave a node-ID. */
-static size_t count_given(const lss_aa_state *s) {
-        size_t n = 0;
-        for (size_t i = 0; i < s->n_out; i++)
-                n += s->out[i].kind == LSS_OUTCOME_ASSIGNED || s->out[i].kind == LSS_OUTCOME_POOL;
-        return n;
-}
-
-static lss_outcome *outcome_add(lss_aa_state *s, const lss_identity *id) {
-        for (size_t i = 0; i < s->n_out; i++)
-                if (lss_identity_equal(&s->out[i].id, id))
-                        return &s->out[i]; /* found twice (e.g. by two scans): one outcome */
-        if (s->n_out == s->cap_out) {
-                size_t cap = s->cap_out ? s->cap_out * 2 : 16;
-                lss_outcome *o = realloc(s->out, cap * sizeof(*o));
-                if (!o)
-                        return NULL;
-                s->out = o;
-                s->cap_out = cap;
-        }
-        lss_outcome *o = &s->out[s->n_out++];
-        memset(o, 0, sizeof(*o));
-        o->id = *id;
-        return o;
-}
-
-static bool already_handled(const lss_aa_state *s, const lss_identity *id) {
-        for (size_t i = 0; i < s->n_out; i++)
-                if (lss_identity_equal(&s->out[i].id, id) && s->out[i].kind != LSS_OUTCOME_MISSING)
-                        return true;
-        return false;
-}
-
-bool lss_map_entry_matches(const lss_map_entry *e, const lss_identity *id) {
-        return lss_identity_matches(&e->id, e->revision_known, id);
-}
-
-static int lookup(const lss_autoassign_plan *p, const lss_identity *id) {
-        for (size_t i = 0; i < p->n_map; i++)
-                if (lss_map_entry_matches(&p->map[i], id))
-                        return (int) i;
-        return -1;
 }
 
 static int todo_take(lss_aa_state *s, const lss_device *d, size_t n) {
@@ -133,67 +50,6 @@ static uint8_t pool_next(const lss_aa_state *s) {
                 if (!s->used[id])
                         return (uint8_t) id;
         return 0;
-}
-
-/* Turn the result of an assignment into the device's outcome. */
-static void record(lss_master *m, lss_aa_state *s, const lss_identity *id, bool pool) {
-        const lss_result *r = &m->result;
-        int e = lookup(s->plan, id);
-        if (e >= 0 && r->status != LSS_OK && !s->patient)
-                s->failed_at[e] = r->failed_service;
-        lss_outcome *o = outcome_add(s, id);
-        if (!o)
-                return;
-        o->old_node_id = r->node_id;
-        o->status = r->status;
-        snprintf(o->message, sizeof(o->message), "%s", r->message);
-        if (r->status == LSS_OK) {
-                o->kind = !r->changed ? LSS_OUTCOME_UNCHANGED : pool ? LSS_OUTCOME_POOL : LSS_OUTCOME_ASSIGNED;
-                o->new_node_id = s->target;
-                o->not_stored = r->not_stored;
-                o->err = r->err;
-                o->dry = r->dry && r->changed;
-                s->used[s->target] = true;
-        } else if (r->status == LSS_E_NOT_FOUND) {
-                o->kind = LSS_OUTCOME_MISSING;
-                o->old_node_id = o->new_node_id = 0;
-        } else {
-                o->kind = r->status == LSS_E_CONFLICT ? LSS_OUTCOME_CONFLICT : LSS_OUTCOME_FAILED;
-                o->new_node_id = r->node_id;
-                if (r->in_use)
-                        s->used[s->target] = true;
-        }
-        if (lss_node_id_valid(r->node_id))
-                s->used[r->node_id] = true;
-        if (s->patient && r->status == LSS_OK && e >= 0 && s->first[e].kind != LSS_OUTCOME_MISSING &&
-            s->first[e].old_node_id != 0 && s->first[e].old_node_id != s->target) {
-                /* the first look changed it before it fell silent: this pass assigned it */
-                o->kind = pool ? LSS_OUTCOME_POOL : LSS_OUTCOME_ASSIGNED;
-                o->old_node_id = s->first[e].old_node_id;
-        }
-        if (s->patient && r->status != LSS_E_NOT_FOUND && !o->message[0])
-                snprintf(o->message, sizeof(o->message), "found on a second look, with waits of %u ms",
-                         m->timing.cfg.timeout_us / 1000);
-        /* the pass goes on: one device's trouble is its own outcome */
-        m->result.status = LSS_OK;
-        m->result.failed_service = LSS_SERVICE_NONE;
-        m->result.reason = LSS_REASON_NONE;
-        m->result.message[0] = 0;
-        m->result.in_use = false;
-}
-
-/* The misbehaving slave is the pass's error and a failed outcome of its own. */
-static void enumeration_failed(lss_aa_state *s, lss_master *m) {
-        s->failed = m->result.status;
-        snprintf(s->failed_msg, sizeof(s->failed_msg), "%s", m->result.message);
-        lss_outcome *o = outcome_add(s, &m->result.id);
-        if (o) {
-                o->kind = LSS_OUTCOME_FAILED;
-                o->status = m->result.status;
-                o->old_node_id = o->new_node_id = 0;
-                snprintf(o->message, sizeof(o->message), "%s", m->result.message);
-        }
-        m->result.status = LSS_OK;
 }
 
 static unsigned assign_flags(const lss_aa_state *s) {
@@ -226,36 +82,68 @@ static bool stops(const lss_aa_state *s) {
         return s->plan->nmt_stop && !s->plan->dry_run;
 }
 
+/* A candidate of the replacement rule waits for the end of the pass. */
+static int cand_keep(lss_aa_state *s, const lss_device *d) {
+        for (size_t i = 0; i < s->n_cand; i++)
+                if (lss_identity_equal(&s->cand[i].id, &d->id))
+                        return 0; /* found again by a later scan */
+        if (s->n_cand == s->cap_cand) {
+                size_t cap = s->cap_cand ? s->cap_cand * 2 : 4;
+                lss_device *c = realloc(s->cand, cap * sizeof(*c));
+                if (c)
+                        s->cand = c;
+                lss_replace_verdict *v = c ? realloc(s->verdict, cap * sizeof(*v)) : NULL;
+                if (!v)
+                        return -ENOMEM;
+                s->verdict = v;
+                s->cap_cand = cap;
+        }
+        s->cand[s->n_cand++] = *d;
+        return 0;
+}
+
+/* Which node-ID the found device todo[t] gets (s->target, s->entry,
+ * s->replacing); false: none, its outcome is recorded or it is kept for the
+ * replacement rule. */
+static bool choose_target(lss_aa_state *s) {
+        const lss_device *d = &s->todo[s->t];
+        const lss_replace_verdict *v = s->deciding ? &s->verdict[s->t] : NULL;
+        s->replacing = -1;
+        s->entry = aa_lookup(s->plan, &d->id);
+        if (s->entry >= 0) {
+                s->handled[s->entry] = true;
+                s->target = s->plan->map[s->entry].node_id;
+                return true;
+        }
+        if (v && v->entry >= 0) {
+                s->replacing = v->entry;
+                s->target = s->plan->map[v->entry].node_id;
+                return true;
+        }
+        if (v && v->ambiguous) {
+                aa_leave_alone(s, d, LSS_OUTCOME_UNKNOWN, LSS_OK, v->why);
+                return false;
+        }
+        /* decided before the pool could take it */
+        if (!v && lss_replace_candidate(s->plan, s->handled, d) && cand_keep(s, d) == 0)
+                return false;
+        if (s->plan->unknown == LSS_UNKNOWN_POOL && d->node_id == LSS_NODE_ID_UNCONFIGURED) {
+                s->target = pool_next(s);
+                if (s->target != 0)
+                        return true;
+                aa_leave_alone(s, d, LSS_OUTCOME_FAILED, LSS_E_INVALID, "the pool is exhausted");
+                return false;
+        }
+        aa_leave_alone(s, d, LSS_OUTCOME_UNKNOWN, LSS_OK, "");
+        return false;
+}
+
 /* Handle the devices in `todo` (full identities, found by a scan). */
 static int handle_found(lss_master *m, lss_aa_state *s) {
         PT_BEGIN(&s->i_pc);
         for (s->t = 0; s->t < s->n_todo; s->t++) {
-                if (already_handled(s, &s->todo[s->t].id))
+                if (aa_already_handled(s, &s->todo[s->t].id) || !choose_target(s))
                         continue;
-                s->entry = lookup(s->plan, &s->todo[s->t].id);
-                if (s->entry >= 0) {
-                        s->handled[s->entry] = true;
-                        s->target = s->plan->map[s->entry].node_id;
-                } else if (s->plan->unknown == LSS_UNKNOWN_POOL && s->todo[s->t].node_id == LSS_NODE_ID_UNCONFIGURED) {
-                        s->target = pool_next(s);
-                        if (s->target == 0) {
-                                lss_outcome *o = outcome_add(s, &s->todo[s->t].id);
-                                if (o) {
-                                        o->kind = LSS_OUTCOME_FAILED;
-                                        o->status = LSS_E_INVALID;
-                                        o->old_node_id = o->new_node_id = s->todo[s->t].node_id;
-                                        snprintf(o->message, sizeof(o->message), "the pool is exhausted");
-                                }
-                                continue;
-                        }
-                } else {
-                        lss_outcome *o = outcome_add(s, &s->todo[s->t].id);
-                        if (o) {
-                                o->kind = LSS_OUTCOME_UNKNOWN;
-                                o->old_node_id = o->new_node_id = s->todo[s->t].node_id;
-                        }
-                        continue;
-                }
                 for (;;) {
                         memset(&m->as, 0, sizeof(m->as));
                         m->as.id = s->todo[s->t].id;
@@ -266,7 +154,7 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                         m->as.unstored = unstored_now(s);
                         PT_CALL(&s->i_pc, proc_assign(m, &m->as));
                         /* a pool ID somebody already answers to: take the next one */
-                        if (s->entry < 0 && m->result.in_use) {
+                        if (s->entry < 0 && s->replacing < 0 && m->result.in_use) {
                                 s->used[s->target] = true;
                                 m->result.status = LSS_OK;
                                 m->result.in_use = false;
@@ -279,7 +167,13 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                 }
                 s->changed = m->result.changed;
                 moved(s, m);
-                record(m, s, &s->todo[s->t].id, s->entry < 0);
+                aa_record(m, s, &s->todo[s->t].id, s->replacing >= 0 ? LSS_OUTCOME_REPLACED :
+                                                    s->entry < 0 ? LSS_OUTCOME_POOL : LSS_OUTCOME_ASSIGNED);
+                if (s->replacing >= 0) {
+                        lss_outcome *o = aa_outcome_add(s, &s->todo[s->t].id);
+                        if (o)
+                                lss_replace_note(s->plan, s->replacing, o, s->out, s->n_out);
+                }
                 if (s->changed && stops(s)) {
                         /* the verifying reset took them out of Stopped */
                         STEP_REQUEST(m, &s->i_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
@@ -310,7 +204,7 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                         s->handled[s->i] = true;
                         s->changed = m->result.changed;
                         moved(s, m);
-                        record(m, s, &s->plan->map[s->i].id, false);
+                        aa_record(m, s, &s->plan->map[s->i].id, LSS_OUTCOME_ASSIGNED);
                         if (s->changed && stops(s)) {
                                 /* the verifying reset took them out of Stopped */
                                 STEP_REQUEST(m, &s->d_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
@@ -336,40 +230,6 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
         }
 
         PT_END(&s->d_pc);
-}
-
-/* Map entries for the second look: not found, found by a scan but silent
- * to the selective switch after it, or silent halfway through their
- * assignment (their outcome is kept in s->first until they answer). */
-static size_t second_look_entries(lss_aa_state *s) {
-        size_t n = 0;
-        for (size_t i = 0; i < s->plan->n_map; i++) {
-                s->first[i].kind = LSS_OUTCOME_MISSING;
-                for (size_t k = 0; s->handled[i] && k < s->n_out;) {
-                        lss_outcome *o = &s->out[k];
-                        if (lookup(s->plan, &o->id) != (int) i) {
-                                k++;
-                        } else if (o->kind == LSS_OUTCOME_FAILED && o->status == LSS_E_NO_RESPONSE) {
-                                s->first[i] = *o;
-                                o->kind = LSS_OUTCOME_MISSING; /* looked for again */
-                                s->handled[i] = false;
-                                /* silent after Configure Node-ID or at Store: it may
-                                 * have the node-ID and not have stored it */
-                                if (s->failed_at[i] == LSS_SERVICE_CONFIGURE_NODE_ID ||
-                                    s->failed_at[i] == LSS_SERVICE_STORE)
-                                        s->restore[s->plan->map[i].node_id] = true;
-                                k++;
-                        } else if (o->kind == LSS_OUTCOME_MISSING && o->status == LSS_E_NOT_FOUND) {
-                                /* the second look says what became of it */
-                                memmove(o, o + 1, (s->n_out - k - 1) * sizeof(*o));
-                                s->n_out--;
-                                s->handled[i] = false;
-                        } else
-                                k++;
-                }
-                n += !s->handled[i];
-        }
-        return n;
 }
 
 /* The wait of the second look: the bus or the host was slower than the
@@ -433,13 +293,13 @@ static int proc_autoassign(lss_master *m) {
                         goto out;
                 if (m->sc.misbehaving) {
                         /* nothing more can be found by fastscan: report it, assign nothing of this scan */
-                        enumeration_failed(s, m);
+                        aa_enumeration_failed(s, m);
                         break;
                 }
                 m->result.status = LSS_OK;
                 if (todo_take(s, m->devices, m->n_devices) < 0)
                         continue;
-                s->given_before = count_given(s);
+                s->given_before = aa_count_given(s);
                 s->i_pc = 0;
                 PT_CALL(&s->pc, handle_found(m, s));
                 /* A slave whose fastscan confirmation (or ping) answer came
@@ -447,7 +307,7 @@ static int proc_autoassign(lss_master *m) {
                  * sat out the rest of that enumeration; the switch to waiting
                  * at its end freed it. So scan blind again while a blind
                  * enumeration still gave somebody a node-ID. */
-                if (s->pair == s->plan->n_map && count_given(s) > s->given_before &&
+                if (s->pair == s->plan->n_map && aa_count_given(s) > s->given_before &&
                     ++s->blind_passes < LSS_NODE_ID_MAX)
                         s->pair--; /* the loop's ++ comes back to the blind enumeration */
         }
@@ -456,7 +316,7 @@ static int proc_autoassign(lss_master *m) {
          * came late (a loaded host, a slow device): what the map has and the
          * pass did not find is looked for again with every step waiting
          * several times longer, after another NMT Stop where asked */
-        if (second_look_entries(s) > 0) {
+        if (aa_second_look_entries(s) > 0) {
                 s->timing = m->timing.cfg;
                 m->stats.patient_wait_us = patient_wait(m, s);
                 m->timing.cfg.timeout_us = m->stats.patient_wait_us;
@@ -476,24 +336,25 @@ static int proc_autoassign(lss_master *m) {
         }
 
         /* 5. what the map has and the bus has not */
-        for (size_t i = 0; i < s->plan->n_map; i++)
-                if (!s->handled[i]) {
-                        lss_outcome *o = s->first[i].kind != LSS_OUTCOME_MISSING ?
-                                outcome_add(s, &s->first[i].id) : NULL;
-                        if (o) {
-                                /* silent again: the first look's failure stands */
-                                *o = s->first[i];
-                                continue;
-                        }
-                        o = outcome_add(s, &s->plan->map[i].id);
-                        if (o) {
-                                o->kind = LSS_OUTCOME_MISSING;
-                                o->status = LSS_E_NOT_FOUND;
-                                if (m->stats.patient_wait_us)
-                                        snprintf(o->message, sizeof(o->message), "not found, also not when "
-                                                 "asked again with waits of %u ms", m->stats.patient_wait_us / 1000);
-                        }
-                }
+        aa_report_missing(m, s);
+
+        /* 6. the replacement rule (lss_replace.h), now that the pass knows
+         * what is missing: the candidates take the place of the found ones */
+        if (s->n_cand > 0) {
+                lss_device *t = s->todo;
+                size_t cap = s->cap_todo;
+                s->todo = s->cand;
+                s->n_todo = s->n_cand;
+                s->cap_todo = s->cap_cand;
+                s->cand = t;
+                s->cap_cand = cap;
+                s->n_cand = 0;
+                lss_replace_decide(s->plan, s->out, s->n_out, s->todo, s->n_todo, s->verdict);
+                s->deciding = true;
+                s->i_pc = 0;
+                PT_CALL(&s->pc, handle_found(m, s));
+                s->deciding = false;
+        }
         STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
         m->result.status = LSS_OK;
         if (s->failed != LSS_OK)
@@ -528,9 +389,4 @@ int lss_master_autoassign(lss_master *m, const lss_autoassign_plan *plan, uint64
                 return -ENOMEM;
         }
         return master_start_procedure(m, proc_autoassign, now);
-}
-
-const lss_outcome *lss_master_outcomes(const lss_master *m, size_t *n) {
-        *n = m->aa ? m->aa->n_out : 0;
-        return m->aa ? m->aa->out : NULL;
 }

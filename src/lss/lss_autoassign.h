@@ -15,6 +15,9 @@
  *     as a conflict and nothing is configured.
  *  6. Every assignment is verified by the boot-up of the new node-ID (NMT
  *     Reset Communication first for a device that was configured).
+ *  7. With `replace`: a mapped device missing and exactly one non-configured
+ *     device of its vendor/product the map does not know: that one gets the
+ *     missing device's node-ID (lss_replace.h has the rule).
  * Every slave ends in waiting state, whatever happens. */
 #pragma once
 
@@ -42,6 +45,9 @@ typedef struct lss_autoassign_plan {
         uint8_t pool_lo, pool_hi; /* for LSS_UNKNOWN_POOL */
         bool store;
         bool nmt_stop;
+        /* a broken device's replacement gets its node-ID (step 7); decided
+         * before the pool takes an unknown device */
+        bool replace;
         /* discovery only: no Configure, Store or NMT frame; the outcomes
          * say what a pass would do (lss_outcome.dry) */
         bool dry_run;
@@ -56,6 +62,7 @@ enum lss_outcome_kind {
         LSS_OUTCOME_UNCHANGED = 0, /* already had its mapped node-ID: nothing sent */
         LSS_OUTCOME_ASSIGNED,      /* got its mapped node-ID, verified by boot-up */
         LSS_OUTCOME_POOL,          /* not in the map, got a node-ID from the pool */
+        LSS_OUTCOME_REPLACED,      /* not in the map, got the node-ID of the missing entry `replaced` */
         LSS_OUTCOME_UNKNOWN,       /* not in the map, left alone */
         LSS_OUTCOME_MISSING,       /* in the map, not on the bus */
         LSS_OUTCOME_CONFLICT,      /* its node-ID already answers on the bus: not assigned */
@@ -70,7 +77,12 @@ typedef struct lss_outcome {
         uint8_t new_node_id; /* what it has now (0 if missing) */
         enum lss_outcome_kind kind;
         bool not_stored;     /* assigned/pool, but the device cannot store (err: its Store Configuration error) */
-        bool dry;            /* assigned/pool: would be, in a dry run (nothing was sent) */
+        bool dry;            /* assigned/pool/replaced: would be, in a dry run (nothing was sent) */
+        /* replaced (and a replacement that failed): the missing map entry's
+         * identity, its revision 0 when the map has none */
+        lss_identity replaced;
+        bool replaced_revision_known;
+        bool replacing;      /* `replaced` is set */
         uint8_t err;
         enum lss_status status;
         char message[160];

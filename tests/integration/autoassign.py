@@ -278,6 +278,102 @@ def test_mixed():
         env.alive()
 
 
+# ---- the replacement of a broken device (replace = true) ----
+
+OLD = 0xDEF                      # mapped to 12 (no revision in the map), broken: not on the bus
+NEW = Slave(V, P, R, 0xABC)      # its replacement, out of the box
+NEW2 = Slave(V, P, R, 0xABD)     # a second one
+OTHER = Slave(0x77, 5, 1, 0x99)  # another product, not in the map
+REPLACE_MAP = [(C.serial, 7), (OLD, 12)]
+
+
+def ident(v, p, r, s):
+    return '%08x:%08x:%s:%08x' % (v, p, '-' if r is None else '%08x' % r, s)
+
+
+def lssctl(env, *args):
+    """lssctl on the test's bus: (exit status, stdout, stderr)."""
+    p = subprocess.run([os.environ.get('LSSCTL_BINARY', 'lssctl')] + list(args), capture_output=True, text=True,
+                       timeout=300, env=dict(os.environ, DBUS_SYSTEM_BUS_ADDRESS=env.address, LANG='C.UTF-8'))
+    return p.returncode, p.stdout, p.stderr
+
+
+def test_replace():
+    """A mapped device gone, one new non-configured device of its vendor and
+    product: AutoAssign gives it the node-ID (a dry run first only says so),
+    with the reply, DeviceReplaced, the journal line and lssctl's map entry."""
+    cfg = config('vcan0', REPLACE_MAP, vendor=hex(V), product=hex(P), replace=True)
+    with Env({'vcan0': [C, NEW, OTHER]}, config=cfg, candump=True) as env:
+        c = env.connect()
+        c.add_match(f"type='signal',sender='{SERVICE}'")
+        old_id, new_id = ident(V, P, None, OLD), ident(*NEW.identity)
+
+        _, outcomes, result = auto_assign(env, options=(1, 'dry_run', 'b', True))
+        expect_eq(outcomes[NEW.serial], ('would-replace', 255, 12, 'would replace %s (missing)' % old_id),
+                  'dry run: the new device')
+        if env.real:
+            expect_eq(slave_ids(env, 'vcan0', [NEW])[NEW.serial], (255, 255), 'the new device after the dry run')
+            n = len(env.frames('vcan0'))
+
+        _, outcomes, result = auto_assign(env)
+        expect_eq(outcomes[NEW.serial], ('replaced', 255, 12, 'replaced %s (missing)' % old_id), 'the new device')
+        expect_eq(outcomes[OLD][:3], ('missing', 0, 0), 'the old device')
+        expect('replaced by %s at node-ID 12' % new_id in outcomes[OLD][3], 'old device detail: %r' % (outcomes[OLD],))
+        expect_eq((outcomes[C.serial][0], outcomes[OTHER.serial][0]), ('unchanged', 'unknown'), 'the others')
+        expect_eq(result, 'partial', 'AutoAssign result (the map still names the old device)')
+        sig = c.wait_signal(lambda m: m.member == 'DeviceReplaced')
+        expect(sig, 'DeviceReplaced')
+        expect_eq([list(sig.body[0]), list(sig.body[1]), sig.body[2]], [[V, P, 0, OLD], list(NEW.identity), 12],
+                  'DeviceReplaced(old, new, node_id)')
+        line = '%s replaced %s (missing) at node-ID 12: update the map entry' % (new_id, old_id)
+        expect(line in env.lssd_output(), 'journal: %r' % [x for x in env.lssd_output().splitlines() if 'replace' in x])
+        p = dev('vcan0', NEW)
+        expect_eq((env.get(p, DEVICE_IFACE, 'NodeId'), env.get(p, DEVICE_IFACE, 'State'),
+                   env.get(p, DEVICE_IFACE, 'MappedNodeId')), (12, 'assigned', 0), 'the new device object')
+        expect_eq(env.get(device_path('vcan0', V, P, 0, OLD), DEVICE_IFACE, 'State'), 'missing', 'the old device object')
+        expect_eq(env.get(B0, BUS_IFACE, 'LastPass')[4].get('replaced'), 1, 'LastPass counts')
+        if env.real:
+            expect_eq(slave_ids(env, 'vcan0', [NEW, OTHER]), {NEW.serial: (12, 12), OTHER.serial: (255, 255)},
+                      'slaves after the pass')
+            frames = env.frames('vcan0')
+            expect_eq(assigning_configures(frames[n:]), [12], 'Configure Node-ID requests of the pass')
+            expect(any(f[1] == 0x700 + 12 and f[2] == b'\x00' for f in frames[n:]), 'boot-up of node 12')
+            expect(all_waiting(env, 'vcan0', [C, NEW, OTHER]), 'slaves left in configuration')
+
+        # non-configured again: lssctl auto-assign replaces it and prints the entry to put in
+        env.call(B0, BUS_IFACE, 'UnassignNodeId', 'uuuua{sv}', *NEW.identity, 1, 'reset', 'b', True)
+        rc, out, err = lssctl(env, 'auto-assign')
+        log('---- lssctl auto-assign (exit status %d) ----\n%s%s' % (rc, out, err))
+        expect_eq(rc, 17, 'lssctl auto-assign exit status (old entry missing): %r %r' % (out, err))
+        entry = ('{ vendor = 0x%08x; product = 0x%08x; revision = 0x%08x; serial = 0x%08x; node_id = 12; }' %
+                 NEW.identity)
+        expect(entry in out and 'Replace the map entry of the missing device' in out, 'lssctl output: %r' % out)
+        expect('replaced by' in err, 'lssctl: the missing device says by whom: %r' % err)
+        env.alive()
+
+
+def test_replace_ambiguous():
+    """Two new devices of the missing one's vendor and product: nobody gets
+    its node-ID, and the reply and the journal say why."""
+    cfg = config('vcan0', REPLACE_MAP, vendor=hex(V), product=hex(P), replace=True)
+    with Env({'vcan0': [C, NEW, NEW2]}, config=cfg, candump=True) as env:
+        c = env.connect()
+        c.add_match(f"type='signal',sender='{SERVICE}'")
+        _, outcomes, result = auto_assign(env)
+        why = '2 unknown devices of 0x%X:0x%X and 1 missing: not replaced, ambiguous' % (V, P)
+        for s in (NEW, NEW2):
+            expect_eq(outcomes[s.serial], ('unknown', 255, 255, why), 'device %x' % s.serial)
+        expect(why in outcomes[OLD][3], 'the missing device: %r' % (outcomes[OLD],))
+        expect_eq(result, 'partial', 'AutoAssign result')
+        expect(not c.wait_signal(lambda m: m.member == 'DeviceReplaced', timeout=0.5), 'DeviceReplaced')
+        expect(any(why in x for x in autoassign_lines(env)), 'journal: %r' % autoassign_lines(env))
+        if env.real:
+            expect_eq(assigning_configures(env.frames('vcan0')), [], 'Configure Node-ID requests')
+            expect_eq(slave_ids(env, 'vcan0', [NEW, NEW2]), {NEW.serial: (255, 255), NEW2.serial: (255, 255)},
+                      'the new devices')
+        env.alive()
+
+
 # ---- the interface is not there at boot ----
 
 def test_notify_missing_interface():
@@ -549,6 +645,8 @@ TESTS = {
     'crash-restart': test_crash_restart,
     'interrupted-store': test_interrupted_store,
     'bad-config': test_bad_config,
+    'replace': test_replace,
+    'replace-ambiguous': test_replace_ambiguous,
 }
 
 if __name__ == '__main__':

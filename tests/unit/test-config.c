@@ -199,6 +199,7 @@ START_TEST(all_keys) {
         ck_assert_uint_eq(b->pool_lo, 120);
         ck_assert_uint_eq(b->pool_hi, 126);
         ck_assert(b->nmt_stop);
+        ck_assert(b->replace);
         ck_assert_uint_eq(b->lss_timeout_ms, 50);
         ck_assert_int_eq(b->lss_timing, LSSD_LSS_TIMING_ADAPTIVE);
         ck_assert(b->has_vendor && b->has_product);
@@ -213,7 +214,7 @@ START_TEST(all_keys) {
         ck_assert_uint_eq(dev->identity.serial, 0x1276);
         ck_assert(!dev->has_revision);
         ck_assert_uint_eq(dev->node_id, 5);
-        ck_assert_uint_eq(dev->line, 19);
+        ck_assert_uint_eq(dev->line, 20);
         dev = &b->devices[2];
         ck_assert_uint_eq(dev->identity.vendor, 0x9A);
         ck_assert_uint_eq(dev->identity.product, 3);
@@ -253,6 +254,7 @@ START_TEST(defaults) {
         ck_assert(!b->auto_assign);
         ck_assert(b->store);
         ck_assert(!b->nmt_stop);
+        ck_assert(!b->replace);
         ck_assert(!b->bitrate_change);
         ck_assert_int_eq(b->unknown, LSSD_UNKNOWN_IGNORE);
         ck_assert_uint_eq(b->lss_timeout_ms, 20);
@@ -423,6 +425,7 @@ static const struct {
         { "auto_assign = 1;", "buses[0].auto_assign: expected true or false, got an integer" },
         { "store = \"yes\";", "buses[0].store: expected true or false, got a string" },
         { "nmt_stop = 0;", "buses[0].nmt_stop: expected true or false, got an integer" },
+        { "replace = \"yes\";", "buses[0].replace: expected true or false, got a string" },
         { "bitrate_change = [ true ];", "buses[0].bitrate_change: expected true or false, got an array [ ]" },
         { "unknown = 1;", "buses[0].unknown: expected a string, got an integer" },
         { "unknown = \"maybe\";", "buses[0].unknown: \"maybe\" is not \"ignore\" or \"pool\"" },
@@ -1008,16 +1011,16 @@ START_TEST(describe) {
         char buf[LSSD_BUS_DESCRIBE_MAX];
         ck_assert_int_eq(load("lss_timing = \"fixed\";\n"
                               "buses = ( { interface = \"can0\"; bitrate = 250000; auto_assign = true; unknown = \"pool\";\n"
-                              "pool = [ 100, 110 ]; nmt_stop = true; bitrate_change = true; lss_timeout_ms = 30;\n"
+                              "pool = [ 100, 110 ]; nmt_stop = true; replace = true; bitrate_change = true; lss_timeout_ms = 30;\n"
                               "vendor = 1; product = 2; devices = ( { serial = 10; node_id = 5; } ); },\n"
                               "{ interface = \"can1\"; store = false; devices = ( { vendor = 1; product = 2; serial = 10; node_id = 5; },\n"
                               "{ vendor = 1; product = 2; serial = 11; node_id = 6; } ); } );\n", &c, &d), 0);
         ck_assert_str_eq(lssd_bus_config_describe(&c->buses[0], buf, sizeof(buf)),
                          "can0: 250000 bit/s, 1 mapped device, auto-assign on, store on, unknown devices: pool 100..110, "
-                         "nmt-stop on, bit-rate change allowed, LSS timeout 30 ms (fixed)");
+                         "nmt-stop on, replace on, bit-rate change allowed, LSS timeout 30 ms (fixed)");
         ck_assert_str_eq(lssd_bus_config_describe(&c->buses[1], buf, sizeof(buf)),
                          "can1: 125000 bit/s, 2 mapped devices, auto-assign off, store off, unknown devices: ignore, "
-                         "nmt-stop off, bit-rate change off, LSS timeout 20 ms (fixed)");
+                         "nmt-stop off, replace off, bit-rate change off, LSS timeout 20 ms (fixed)");
         /* truncation is safe */
         char small[8];
         ck_assert_str_eq(lssd_bus_config_describe(&c->buses[0], small, sizeof(small)), "can0: 2");
