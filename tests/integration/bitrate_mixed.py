@@ -39,7 +39,7 @@ GLOBAL = NAMES['LSSD_BITRATE_OPTION_GLOBAL']
 
 
 def env_of(slaves):
-    return Env({'vcan0': slaves}, config=CONFIG, sim_args=['--bitrate', '125000'])
+    return Env({'vcan0': slaves}, config=CONFIG, sim_args=['--bitrate', '125000'], candump=True)
 
 
 def set_bitrate(env, rate, *options):
