@@ -865,6 +865,8 @@ int verb_set_bitrate(ctl_context *c) {
                 r = append_bool_option(m, "store", false);
         if (r >= 0 && c->skip_missing)
                 r = append_bool_option(m, "skip_missing", true);
+        if (r >= 0 && c->global)
+                r = append_bool_option(m, LSSD_BITRATE_OPTION_GLOBAL, true);
         if (r >= 0)
                 r = sd_bus_message_close_container(m);
         if (r < 0) {

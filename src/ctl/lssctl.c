@@ -29,6 +29,7 @@ enum {
         OPT_RESET = 1 << 12,
         OPT_AS_CONFIG = 1 << 13,
         OPT_NO_SDO = 1 << 14,
+        OPT_GLOBAL = 1 << 15,
 };
 
 typedef struct verb {
@@ -50,7 +51,8 @@ static const verb verbs[] = {
         { "auto-assign", 0, 0,
           OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE | OPT_QUIET | OPT_DRY_RUN, false,
           verb_auto_assign },
-        { "set-bitrate", 1, 1, OPT_BUS | OPT_DELAY | OPT_NO_STORE | OPT_SKIP_MISSING | OPT_QUIET, false,
+        { "set-bitrate", 1, 1, OPT_BUS | OPT_DELAY | OPT_NO_STORE | OPT_SKIP_MISSING | OPT_GLOBAL | OPT_QUIET,
+          false,
           verb_set_bitrate },
         { "reload", 0, 0, OPT_QUIET, false, verb_reload },
         { "monitor", 0, 0, OPT_BUS | OPT_JSON, false, verb_monitor },
@@ -91,6 +93,8 @@ static void help(void) {
                "                           reload)\n"
                "     --delay MS            Switch delay for set-bitrate (default 100)\n"
                "     --skip-missing        set-bitrate: go ahead without mapped devices the scan misses\n"
+               "     --global              set-bitrate: all devices at once (CiA 305's global procedure), for\n"
+               "                           devices that do not take the selective switch; see lssd(8)\n"
                "     --vendor ID --product ID\n"
                "                           Also look for configured slaves of this pair (scan)\n"
                "     --as-config           Print what scan found as the buses of lssd.conf(5), a map\n"
@@ -114,6 +118,7 @@ enum {
         ARG_RESET,
         ARG_AS_CONFIG,
         ARG_NO_SDO,
+        ARG_GLOBAL,
 };
 
 static const char *option_name(unsigned flag) {
@@ -133,6 +138,7 @@ static const char *option_name(unsigned flag) {
         case OPT_RESET: return "--reset";
         case OPT_AS_CONFIG: return "--as-config";
         case OPT_NO_SDO: return "--no-sdo";
+        case OPT_GLOBAL: return "--global";
         default: return "?";
         }
 }
@@ -166,6 +172,7 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 { "reset", no_argument, NULL, ARG_RESET },
                 { "as-config", no_argument, NULL, ARG_AS_CONFIG },
                 { "no-sdo", no_argument, NULL, ARG_NO_SDO },
+                { "global", no_argument, NULL, ARG_GLOBAL },
                 { "quiet", no_argument, NULL, 'q' },
                 {}
         };
@@ -244,6 +251,10 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 case ARG_NO_SDO:
                         c->no_sdo = true;
                         *given |= OPT_NO_SDO;
+                        break;
+                case ARG_GLOBAL:
+                        c->global = true;
+                        *given |= OPT_GLOBAL;
                         break;
                 case ARG_AS_CONFIG:
                         c->as_config = true;

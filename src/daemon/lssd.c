@@ -28,8 +28,9 @@ static void help(void) {
                "     --queue-size N      Jobs each bus queues at most (default %u)\n"
                "     --lss-timeout MS    LSS answer timeout of the --bus buses (default %u)\n"
                "     --simulate          Simulated in-memory buses instead of SocketCAN (tests, demos)\n"
-               "     --sim-slave IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:canopennode]]\n"
-               "                         A simulated slave on simulated bus IFACE (implies --simulate)\n",
+               "     --sim-slave IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:PROFILE]]\n"
+               "                         A simulated slave on simulated bus IFACE (implies --simulate);\n"
+               "                         PROFILE: " SIMBUS_PROFILES "\n",
                LSSD_DEFAULT_CONFIG, LSSD_QUEUE_MAX_DEFAULT, LSSD_LSS_TIMEOUT_MS_DEFAULT);
 }
 
@@ -130,9 +131,9 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                         break;
                 case ARG_SIM_SLAVE: {
                         lssd_sim_slave s;
-                        if (simbus_slave_parse(optarg, s.ifname, &s.id, &s.node_id, &s.canopennode) < 0) {
-                                log_error("Invalid --sim-slave '%s': IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:canopennode]]",
-                                          optarg);
+                        if (simbus_slave_parse(optarg, s.ifname, &s.id, &s.node_id, &s.profile) < 0) {
+                                log_error("Invalid --sim-slave '%s': IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID"
+                                          "[:PROFILE]] (PROFILE: " SIMBUS_PROFILES ")", optarg);
                                 return -EINVAL;
                         }
                         lssd_sim_slave *v = realloc(a->sim_slaves, (a->n_sim_slaves + 1) * sizeof(*v));

@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "lss/lss_proto.h"
+#include "simbus/simbus.h"
 
 #define LSSD_QUEUE_MAX_DEFAULT 128u
 
@@ -15,7 +16,7 @@ typedef struct lssd_sim_slave {
         char ifname[16];
         lss_identity id;
         uint8_t node_id;
-        bool canopennode;          /* behaves as a CANopenNode v4 device */
+        simbus_profile profile;    /* how it behaves (a CANopenNode v4 device, ...) */
 } lssd_sim_slave;
 
 /* What the command line asked for. */

@@ -8,12 +8,13 @@
 #include "daemon/lssd_options.h"
 
 typedef struct bitrate_options {
-        bool store, skip_missing;
+        bool store, skip_missing, global;
 } bitrate_options;
 
 static const lssd_option bitrate_table[] = {
         LSSD_OPTION("store", 'b', bitrate_options, store),
         LSSD_OPTION("skip_missing", 'b', bitrate_options, skip_missing),
+        LSSD_OPTION(LSSD_BITRATE_OPTION_GLOBAL, 'b', bitrate_options, global),
         LSSD_OPTION_END,
 };
 
@@ -49,7 +50,8 @@ int lssd_bitrate_method(lssd_bus *b, sd_bus_message *m, uint32_t bitrate, uint16
         j->switch_delay_ms = switch_delay_ms;
         j->bitrate_store = o.store;
         j->bitrate_skip_missing = o.skip_missing;
-        /* configured devices are only found by slowscan of known vendor/product pairs */
+        j->bitrate_global = o.global;
+        /* the map's and the known devices' pairs by slowscan; the others by SDO */
         for (size_t i = 0; r >= 0 && i < lssd_bus_config_of(b)->n_devices; i++)
                 r = lssd_job_add_pair(j, lssd_bus_config_of(b)->devices[i].identity.vendor, lssd_bus_config_of(b)->devices[i].identity.product);
         for (lssd_device *d = lssd_bus_devices(b)->head; r >= 0 && d; d = d->next)

@@ -180,7 +180,7 @@ lssd_job *lssd_job_queue_pop(lssd_job_queue *q) {
 }
 
 bool lssd_job_uncancellable(const lssd_job *j) {
-        return j && j->type == LSSD_JOB_SET_BITRATE && j->stage > j->n_pairs;
+        return j && j->type == LSSD_JOB_SET_BITRATE && j->br_started;
 }
 
 bool lssd_job_retuning(const lssd_job *j, uint64_t now) {

@@ -92,6 +92,8 @@ struct lssd_job {
         uint32_t bitrate;
         uint16_t switch_delay_ms;
         bool bitrate_store, bitrate_skip_missing;
+        bool bitrate_global;         /* option global: CiA 305's global procedure */
+        bool br_started;             /* the discovery is over, the bit-rate procedure runs */
         lss_bitrate_device *br_devices;
         size_t n_br_devices;
         uint64_t retune_until;       /* link events before this are our own retune */

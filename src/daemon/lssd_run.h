@@ -23,9 +23,21 @@ int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r);
 /* SetBitrate(), lssd_run_bitrate.c (see lssd_bitrate.h) */
 int lssd_run_bitrate(lssd_job_env *e, lssd_job *j, const lss_result *r);
 
-/* Starts stage j->stage of a scan: 0 the fastscan enumeration, then one
- * slowscan per vendor/product pair of j->pairs. Negative errno on failure. */
-int lssd_scan_stage_start(lssd_job_env *e, const lssd_job *j);
+/* The stages that find the devices of a bus, shared by Scan and SetBitrate
+ * (lssd_run_discover.c): 0 fastscan enumeration, 1..n_pairs slowscan of
+ * j->pairs, then with j->scan_sdo the SDO discovery (lssd_discover_sdo_stage)
+ * and the LSS confirmation of what SDO alone found (_confirm_stage). */
+unsigned lssd_discover_n_stages(const lssd_job *j);
+unsigned lssd_discover_sdo_stage(const lssd_job *j);
+unsigned lssd_discover_confirm_stage(const lssd_job *j);
+/* Starts stage j->stage. Negative errno on failure. */
+int lssd_discover_start(lssd_job_env *e, const lssd_job *j);
+/* Stage j->stage ended with r: its devices join j->found (SDO's complete
+ * identities by SDO, those not found by LSS to confirm). Negative errno:
+ * out of memory. */
+int lssd_discover_take(lssd_job_env *e, lssd_job *j, const lss_result *r);
+/* Whether stage j->stage (just ended) has a successor to start. */
+bool lssd_discover_more(const lssd_job *j);
 
 /* Scan's SDO discovery ended with result r: its complete identities are
  * added to the finds (by SDO), those not found by LSS become j->sdo_cand,

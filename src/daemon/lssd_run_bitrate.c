@@ -36,8 +36,8 @@ static int start_failed(lssd_job_env *e, lssd_job *j, int r) {
         return fail(e, j, SD_BUS_ERROR_FAILED, "failed", "could not start: %s", strerror(-r));
 }
 
-static int scan_start_stage(lssd_job_env *e, lssd_job *j) {
-        int k = lssd_scan_stage_start(e, j);
+static int discover_start(lssd_job_env *e, lssd_job *j) {
+        int k = lssd_discover_start(e, j);
         return k < 0 ? start_failed(e, j, k) : 1;
 }
 
@@ -48,7 +48,7 @@ static bool in_list(const lss_bitrate_device *d, size_t n, const lss_identity *i
         return false;
 }
 
-static int add_device(lssd_job *j, const lss_identity *id, size_t *cap) {
+static int add_device(lssd_job *j, const lss_identity *id, uint8_t node_id, bool no_select, size_t *cap) {
         if (in_list(j->br_devices, j->n_br_devices, id))
                 return 0;
         if (j->n_br_devices == *cap) {
@@ -59,8 +59,27 @@ static int add_device(lssd_job *j, const lss_identity *id, size_t *cap) {
                 j->br_devices = d;
                 *cap = c;
         }
-        j->br_devices[j->n_br_devices++] = (lss_bitrate_device) { .id = *id };
+        j->br_devices[j->n_br_devices++] = (lss_bitrate_device) { .id = *id, .node_id = node_id,
+                                                                  .no_select = no_select };
         return 0;
+}
+
+/* The devices SDO found that did not answer the selective switch
+ * ("v:p:r:s at node n, ..."); 0 when none. */
+static size_t sdo_only(const lssd_job *j, char *buf, size_t size) {
+        size_t n = 0, len = 0;
+        buf[0] = 0;
+        for (size_t i = 0; i < j->n_found; i++) {
+                const lss_device *d = &j->found[i].dev;
+                if (j->found[i].by & LSSD_FOUND_LSS)
+                        continue;
+                if (len + 60 < size)
+                        len += (size_t) snprintf(buf + len, size - len, "%s%08x:%08x:%08x:%08x at node %u",
+                                                 n ? ", " : "", d->id.vendor, d->id.product, d->id.revision,
+                                                 d->id.serial, d->node_id);
+                n++;
+        }
+        return n;
 }
 
 /* Every device on the bus: found now, in the map, or seen before. A device
@@ -73,17 +92,18 @@ static int collect_devices(lssd_job_env *e, lssd_job *j, char *unaddressable, si
 
         unaddressable[0] = 0;
         for (size_t i = 0; r >= 0 && i < j->n_found; i++)
-                r = add_device(j, &j->found[i].dev.id, &cap);
+                r = add_device(j, &j->found[i].dev.id, j->found[i].dev.node_id,
+                               !(j->found[i].by & LSSD_FOUND_LSS), &cap);
         if (j->bitrate_skip_missing || r < 0)
                 return r;
         for (lssd_device *d = e->devices->head; r >= 0 && d; d = d->next)
                 if (!d->missing)
-                        r = add_device(j, &d->id, &cap);
+                        r = add_device(j, &d->id, 0, false, &cap);
         for (size_t i = 0; r >= 0 && i < e->config->n_devices; i++) {
                 const lssd_device_config *c = &e->config->devices[i];
                 bool found = false;
                 if (c->has_revision) {
-                        r = add_device(j, &c->identity, &cap);
+                        r = add_device(j, &c->identity, 0, false, &cap);
                         continue;
                 }
                 for (size_t k = 0; k < j->n_br_devices && !found; k++)
@@ -168,6 +188,11 @@ static int finish(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         char host[160];
 
         log_outcomes(e, j);
+        if (j->bitrate_global)
+                log_info("%s: SetBitrate %u bit/s: global: %u answer%s to Configure Bit Timing, %zu device%s known "
+                         "(identical answers can merge on the wire: a lower bound)", e->ifname, j->bitrate,
+                         lss_master_bitrate_answers(e->engine), lss_master_bitrate_answers(e->engine) == 1 ? "" : "s",
+                         j->n_br_devices, j->n_br_devices == 1 ? "" : "s");
         retune_text(e, j, host, sizeof(host));
         log_notice("%s: SetBitrate %u bit/s: %s", e->ifname, j->bitrate, host);
         /* the master runs at the new rate once the activation went out and
@@ -202,10 +227,51 @@ static int finish(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                     lssd_status_to_result(r->status), lssd_job_env_bitrate(e));
 }
 
-int lssd_run_bitrate(lssd_job_env *e, lssd_job *j, const lss_result *r) {
+/* The discovery is over: every device it found, mapped or known is
+ * switched by the engine's procedure (one by one, or global). */
+static int start_bitrate(lssd_job_env *e, lssd_job *j) {
         char missing[512];
         int k;
+        size_t n = sdo_only(j, missing, sizeof(missing));
+        if (n > 0 && !j->bitrate_global)
+                /* one by one it would be left at the old rate, cut off */
+                return fail(e, j, LSSD_ERROR_NOT_SUPPORTED, "not-supported",
+                            "device%s %s answer%s SDO (1018h) but not the LSS selective switch: %s cannot be "
+                            "switched one by one and would be left at the old rate; nothing changed (option "
+                            LSSD_BITRATE_OPTION_GLOBAL "=true switches all devices at once by CiA 305's global "
+                            "procedure, see lssd(8))", n == 1 ? "" : "s", missing, n == 1 ? "s" : "",
+                            n == 1 ? "it" : "they");
+        k = collect_devices(e, j, missing, sizeof(missing));
+        if (k < 0)
+                return start_failed(e, j, k);
+        if (missing[0])
+                return fail(e, j, LSSD_ERROR_NOT_FOUND, "not-found",
+                            "mapped device%s not found by the scan, and without a revision in the map it "
+                            "cannot be addressed: %s; nothing changed (option skip_missing=true leaves "
+                            "devices the scan does not find out)", strchr(missing, ',') ? "s" : "",
+                            missing);
+        if (j->n_br_devices == 0)
+                return fail(e, j, LSSD_ERROR_NOT_FOUND, "not-found",
+                            "no device found on %s: nothing to switch, nothing changed", e->ifname);
 
+        lss_bitrate_params p = {
+                .bitrate = j->bitrate,
+                .old_bitrate = lssd_job_env_bitrate(e),
+                .delay_ms = j->switch_delay_ms,
+                .store = j->bitrate_store,
+                .devices = j->br_devices,
+                .n_devices = j->n_br_devices,
+                .global = j->bitrate_global,
+        };
+        log_info("%s: SetBitrate: %zu device%s to switch%s", e->ifname, j->n_br_devices,
+                 j->n_br_devices == 1 ? "" : "s", j->bitrate_global ? ", all at once (global)" : "");
+        j->br_started = true;
+        j->stage = j->n_stages - 1;
+        k = lss_master_set_bitrate(e->engine, &p, lssd_job_env_now(e));
+        return k < 0 ? start_failed(e, j, k) : 1;
+}
+
+int lssd_run_bitrate(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (!r) {
                 /* whether the host can follow, before the first frame */
                 lssd_bitrate_refusal no;
@@ -213,49 +279,27 @@ int lssd_run_bitrate(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 e->ops->host_link(e->userdata, &host);
                 if (lssd_bitrate_check_host(&host, j->bitrate, &no) < 0)
                         return fail(e, j, no.error, no.result, "%s", no.text);
-                j->n_stages = (unsigned) j->n_pairs + 2;
-                log_info("%s: SetBitrate %u -> %u bit/s, switch delay %u ms%s: scanning", e->ifname,
-                         lssd_job_env_bitrate(e), j->bitrate, j->switch_delay_ms, j->bitrate_store ? ", store" : "");
-                return scan_start_stage(e, j);
+                /* the stages of Scan, SDO and its confirmation included */
+                j->scan_sdo = true;
+                j->n_stages = lssd_discover_n_stages(j) + 1;
+                log_info("%s: SetBitrate %u -> %u bit/s, switch delay %u ms%s%s: scanning", e->ifname,
+                         lssd_job_env_bitrate(e), j->bitrate, j->switch_delay_ms, j->bitrate_store ? ", store" : "",
+                         j->bitrate_global ? ", global" : "");
+                return discover_start(e, j);
         }
 
-        if (j->stage <= j->n_pairs) {
-                for (size_t i = 0; i < r->n_devices; i++)
-                        if (lssd_job_add_found(j, &r->devices[i]) < 0)
-                                return start_failed(e, j, -ENOMEM);
+        if (!j->br_started) {
+                if (lssd_discover_take(e, j, r) < 0)
+                        return start_failed(e, j, -ENOMEM);
                 if (r->status != LSS_OK)
                         return fail(e, j, lssd_status_to_error_name(r->status), lssd_status_to_result(r->status),
                                     "the scan did not finish (%s): nothing changed",
                                     r->message[0] ? r->message : lssd_status_to_result(r->status));
-                if (++j->stage <= j->n_pairs)
-                        return scan_start_stage(e, j);
-
-                k = collect_devices(e, j, missing, sizeof(missing));
-                if (k < 0)
-                        return start_failed(e, j, k);
-                if (missing[0])
-                        return fail(e, j, LSSD_ERROR_NOT_FOUND, "not-found",
-                                    "mapped device%s not found by the scan, and without a revision in the map it "
-                                    "cannot be addressed: %s; nothing changed (option skip_missing=true leaves "
-                                    "devices the scan does not find out)", strchr(missing, ',') ? "s" : "",
-                                    missing);
-                if (j->n_br_devices == 0)
-                        return fail(e, j, LSSD_ERROR_NOT_FOUND, "not-found",
-                                    "no LSS device on %s: nothing to switch, nothing changed", e->ifname);
-
-                lss_bitrate_params p = {
-                        .bitrate = j->bitrate,
-                        .old_bitrate = lssd_job_env_bitrate(e),
-                        .delay_ms = j->switch_delay_ms,
-                        .store = j->bitrate_store,
-                        .devices = j->br_devices,
-                        .n_devices = j->n_br_devices,
-                };
-                log_info("%s: SetBitrate: %zu device%s to switch", e->ifname, j->n_br_devices,
-                         j->n_br_devices == 1 ? "" : "s");
-                k = lss_master_set_bitrate(e->engine, &p, lssd_job_env_now(e));
-                return k < 0 ? start_failed(e, j, k) : 1;
+                if (lssd_discover_more(j)) {
+                        j->stage++;
+                        return discover_start(e, j);
+                }
+                return start_bitrate(e, j);
         }
         return finish(e, j, r);
 }
-

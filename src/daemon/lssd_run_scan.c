@@ -8,59 +8,19 @@
 #include "daemon/lssd_run.h"
 #include "daemon/lssd_log.h"
 
-/* ---- Scan: fastscan enumeration, then slowscan per vendor/product pair;
- * then (option sdo) SDO discovery of 1018h at every node-ID, and the
- * confirmation through LSS of what only SDO found ---- */
-
-/* What an enumeration will likely find: the non-configured devices seen
- * before (the first scan of a bus cannot know: its progress assumes as many
- * again as found so far). */
-void lssd_run_expect_finds(lssd_job_env *e) {
-        unsigned n = 0;
-        for (const lssd_device *d = e->devices->head; d; d = d->next)
-                n += !d->missing && d->node_id == LSS_NODE_ID_UNCONFIGURED;
-        lss_master_set_expected_finds(e->engine, n);
-}
-
-int lssd_scan_stage_start(lssd_job_env *e, const lssd_job *j) {
-        uint64_t now = lssd_job_env_now(e);
-        if (j->stage == 0) {
-                lssd_run_expect_finds(e);
-                return lss_master_enumerate(e->engine, NULL, now);
-        }
-        const lssd_vendor_product *p = &j->pairs[j->stage - 1];
-        lss_identify_range range = {
-                .vendor = p->vendor, .product = p->product,
-                .rev_lo = 0, .rev_hi = UINT32_MAX,
-                .serial_lo = 0, .serial_hi = UINT32_MAX,
-        };
-        return lss_master_slowscan(e->engine, &range, now);
-}
-
-/* The stages after the LSS ones (0..n_pairs). */
-static unsigned sdo_stage(const lssd_job *j) {
-        return (unsigned) j->n_pairs + 1;
-}
-
-static unsigned confirm_stage(const lssd_job *j) {
-        return (unsigned) j->n_pairs + 2;
-}
+/* ---- Scan: the stages of lssd_run_discover.c (fastscan enumeration,
+ * slowscan per vendor/product pair, with option sdo SDO discovery of 1018h
+ * at every node-ID and the confirmation through LSS of what only SDO
+ * found), then the devices published ---- */
 
 static int scan_start_stage(lssd_job_env *e, lssd_job *j) {
-        int k;
-        if (j->stage == sdo_stage(j)) {
-                lss_sdo_discover_params p = { .first = LSS_NODE_ID_MIN, .last = LSS_NODE_ID_MAX };
-                k = lss_master_sdo_discover(e->engine, &p, lssd_job_env_now(e));
-        } else if (j->stage == confirm_stage(j))
-                k = lss_master_confirm(e->engine, j->sdo_cand, j->n_sdo_cand, lssd_job_env_now(e));
-        else
-                k = lssd_scan_stage_start(e, j);
+        int k = lssd_discover_start(e, j);
         return k < 0 ? lssd_job_start_failed(e, j, k) : 1;
 }
 
 static unsigned scan_part(const lssd_job *j) {
-        return j->stage < sdo_stage(j) ? LSSD_SCAN_PART_LSS
-                : j->stage == sdo_stage(j) ? LSSD_SCAN_PART_SDO : LSSD_SCAN_PART_CONFIRM;
+        unsigned sdo = lssd_discover_sdo_stage(j);
+        return j->stage < sdo ? LSSD_SCAN_PART_LSS : j->stage == sdo ? LSSD_SCAN_PART_SDO : LSSD_SCAN_PART_CONFIRM;
 }
 
 /* The stage ended (or the job): its time counts for its part. */
@@ -82,15 +42,6 @@ double lssd_scan_progress(const lssd_job_env *e, const lssd_job *j, double p) {
         for (unsigned k = 0; k < part; k++)
                 before += (double) w[k];
         return (before + within * (double) w[part]) / total;
-}
-
-/* Whether stage j->stage (just ended) has a successor to start. */
-static bool scan_more_stages(const lssd_job *j) {
-        if (j->stage < (unsigned) j->n_pairs)
-                return true;
-        if (!j->scan_sdo)
-                return false;
-        return j->stage < sdo_stage(j) || (j->stage == sdo_stage(j) && j->n_sdo_cand > 0);
 }
 
 static int compare_devices(const void *a, const void *b) {
@@ -164,7 +115,7 @@ void lssd_scan_found(lssd_job_env *e, lssd_job *j, const lss_device *f) {
         if (scan_announced(j, &f->id))
                 return; /* by an earlier stage: the end brings its node-ID up to date */
         /* the confirmation stage confirms what SDO found */
-        unsigned by = LSSD_FOUND_LSS | (j->scan_sdo && j->stage == confirm_stage(j) ? LSSD_FOUND_SDO : 0);
+        unsigned by = LSSD_FOUND_LSS | (j->scan_sdo && j->stage == lssd_discover_confirm_stage(j) ? LSSD_FOUND_SDO : 0);
         lssd_device *d = scan_record(e, f, by, lssd_realtime_us());
         if (!d)
                 return; /* tried again at the end */
@@ -239,18 +190,13 @@ static void scan_log(lssd_job_env *e, lssd_job *j) {
 
 int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (!r) {
-                j->n_stages = (unsigned) j->n_pairs + 1 + (j->scan_sdo ? 2 : 0);
+                j->n_stages = lssd_discover_n_stages(j);
                 j->part_started = lssd_job_env_now(e);
                 return scan_start_stage(e, j);
         }
 
-        for (size_t i = 0; i < r->n_devices; i++)
-                if (lssd_job_add_found(j, &r->devices[i]) < 0) {
-                        j->scan_incomplete = true;
-                        break;
-                }
-        if (j->scan_sdo && j->stage == sdo_stage(j) && r->status == LSS_OK && lssd_scan_take_sdo(e, j, r) < 0) {
-                log_error("%s: Scan: out of memory for the devices SDO found", e->ifname);
+        if (lssd_discover_take(e, j, r) < 0) {
+                log_error("%s: Scan: out of memory for the devices found", e->ifname);
                 j->scan_incomplete = true;
         }
 
@@ -267,7 +213,7 @@ int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         }
 
         scan_part_end(e, j);
-        if (scan_more_stages(j)) {
+        if (lssd_discover_more(j)) {
                 j->stage++;
                 return scan_start_stage(e, j);
         }

@@ -50,23 +50,24 @@ static void missing_fields(const lss_sdo_node *n, char *buf, size_t size) {
 static void log_not_a_device(const lssd_job_env *e, const lssd_job *j, const lss_sdo_node *n) {
         char what[96];
         if (n->conflict) {
-                log_warning("%s: Scan: node-ID %u: two devices answered SDO with different identities (1018h): "
+                log_warning("%s: %s: node-ID %u: two devices answered SDO with different identities (1018h): "
                             "they share the node-ID; give one of them another (lssctl assign), Scan with their "
-                            "vendor/product finds each by LSS", e->ifname, n->node_id);
+                            "vendor/product finds each by LSS", e->ifname, lssd_job_name(j), n->node_id);
         } else if (n->source & LSS_SDO_FROM_SDO) {
                 missing_fields(n, what, sizeof(what));
-                log_notice("%s: Scan: node %u answers SDO but its identity is incomplete (%s%s%08x): not "
-                           "reported; Scan with its vendor/product finds it if it answers LSS", e->ifname,
-                           n->node_id, what, n->aborted ? ", first abort code " : "", n->aborted ? n->abort_code : 0);
+                log_notice("%s: %s: node %u answers SDO but its identity is incomplete (%s%s%08x): not "
+                           "reported; Scan with its vendor/product finds it if it answers LSS",
+                           e->ifname, lssd_job_name(j), n->node_id, what, n->aborted ? ", first abort code " : "",
+                           n->aborted ? n->abort_code : 0);
         } else if (!node_id_found(j, n->node_id)) {
                 if (n->nmt_state == 0x04)
-                        log_notice("%s: Scan: node %u sends heartbeats in NMT Stopped: it does not answer SDO; "
-                                   "AutoAssign with nmt_stop, or Scan with its vendor/product, finds it", e->ifname,
-                                   n->node_id);
+                        log_notice("%s: %s: node %u sends heartbeats in NMT Stopped: it does not answer SDO; "
+                                   "AutoAssign with nmt_stop, or Scan with its vendor/product, finds it",
+                                   e->ifname, lssd_job_name(j), n->node_id);
                 else
-                        log_notice("%s: Scan: node %u was heard (%s) but did not answer SDO: not reported; Scan "
-                                   "with its vendor/product finds it if it answers LSS", e->ifname, n->node_id,
-                                   nmt_state_name(n->nmt_state));
+                        log_notice("%s: %s: node %u was heard (%s) but did not answer SDO: not reported; Scan "
+                                   "with its vendor/product finds it if it answers LSS",
+                                   e->ifname, lssd_job_name(j), n->node_id, nmt_state_name(n->nmt_state));
         }
 }
 
@@ -91,7 +92,7 @@ int lssd_scan_take_sdo(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 j->sdo_cand[j->n_sdo_cand++] = n->id;
         }
         if (j->n_sdo_cand > 0)
-                log_debug("%s: Scan: %zu device%s found by SDO only: confirming through LSS", e->ifname,
+                log_debug("%s: %s: %zu device%s found by SDO only: confirming through LSS", e->ifname, lssd_job_name(j),
                           j->n_sdo_cand, j->n_sdo_cand == 1 ? "" : "s");
         return 0;
 }

@@ -15,7 +15,7 @@ static int open_simulated(const lssd_args *args, const char *ifname, uint32_t bi
                 const lssd_sim_slave *sl = &args->sim_slaves[i];
                 if (strcmp(sl->ifname, ifname) != 0)
                         continue;
-                r = simbus_add_slave(s, &sl->id, sl->node_id, sl->canopennode);
+                r = simbus_add_slave(s, &sl->id, sl->node_id, sl->profile);
                 if (r < 0)
                         break;
         }

@@ -485,7 +485,8 @@ int sim_options_parse(sim_options *o, int argc, char **argv, FILE *out, FILE *er
                         o->profile = sim_profile_find(optarg);
                         if (!o->profile)
                                 return fail(err, "--profile '%s': %s", optarg,
-                                            "unknown profile (servo-drive, encoder, transmitter, generic, canopennode)");
+                                            "unknown profile (servo-drive, encoder, transmitter, generic, canopennode, "
+                                            "canopennode-bitrate)");
                         break;
                 case ARG_STATE:
                         if (optarg[0] == '\0')

@@ -40,6 +40,14 @@ static const sim_profile profiles[] = {
                 .default_node_id = LSS_NODE_ID_UNCONFIGURED,
                 .canopennode = true,
         },
+        {
+                .name = "canopennode-bitrate",
+                .summary = "CANopenNode v4 device with a bit-rate callback: as canopennode, but answers "
+                           "Configure Bit Timing",
+                .default_node_id = LSS_NODE_ID_UNCONFIGURED,
+                .canopennode = true,
+                .bit_timing_answered = true,
+        },
 };
 
 const sim_profile *sim_profile_all(size_t *n) {
@@ -63,6 +71,8 @@ void sim_profile_faults(const sim_profile *p, lss_slave_faults *f) {
                 lss_slave_faults_canopennode(f);
         else
                 lss_slave_faults_default(f);
+        if (p->bit_timing_answered)
+                f->bit_timing_silent = false;
         f->needs_nmt_stopped = p->needs_nmt_stopped;
         f->bit_index_unsupported = p->bit_index_unsupported;
 }

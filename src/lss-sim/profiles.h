@@ -20,6 +20,7 @@ typedef struct sim_profile {
         /* deviations from a plain CiA 305 slave */
         bool needs_nmt_stopped;
         bool canopennode;          /* lss_slave_faults_canopennode() */
+        bool bit_timing_answered;  /* ... but answers Configure Bit Timing (a bit-rate callback) */
         uint32_t bit_index_unsupported;
 } sim_profile;
 

@@ -8,7 +8,8 @@
  * rate nobody activated. After the activation the master stays silent for
  * the whole window (2 x delay), asking its caller to retune the host
  * interface inside the first delay period, then checks every device at the
- * new rate. */
+ * new rate. The global procedure (all devices at once) is
+ * lss_bitrate_global.c. */
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>
@@ -87,6 +88,15 @@ static int proc_bitrate(lss_master *m) {
 
         PT_BEGIN(&s->pc);
 
+        if (s->p.global) {
+                /* 1 and 2 at once, for devices not selectable one by one */
+                s->gpc = 0;
+                PT_CALL(&s->pc, proc_bitrate_global_configure(m, s));
+                if (m->result.status != LSS_OK)
+                        goto revert;
+                goto activate;
+        }
+
         /* 1. every device is there, before anything is changed */
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 progress(m, s, 0);
@@ -150,6 +160,7 @@ static int proc_bitrate(lss_master *m) {
                 SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         }
 
+activate:
         /* 3. everybody at once; from here on the change cannot be taken back */
         s->committed = true;
         m->step = (lss_step) { .kind = STEP_DELAY };
@@ -199,6 +210,13 @@ static int proc_bitrate(lss_master *m) {
         s->n_bad = 0;
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 progress(m, s, 2);
+                if (s->p.devices[s->i].no_select) {
+                        /* no selective switch: its SDO server answers at the new rate */
+                        STEP_RETRIED(m, &s->pc, s->attempt, step_node_in_use(m, s->p.devices[s->i].node_id));
+                        s->p.devices[s->i].outcome = step_answered(m) ? LSS_BITRATE_SWITCHED : LSS_BITRATE_LOST;
+                        s->n_bad += !step_answered(m);
+                        continue;
+                }
                 for (s->attempt_conflict = 0;; s->attempt_conflict++) {
                         SELECT_RETRIED(m, &s->pc, s->attempt, &s->p.devices[s->i].id);
                         if (!step_answered(m))
@@ -282,6 +300,9 @@ int lss_master_set_bitrate(lss_master *m, const lss_bitrate_params *p, uint64_t 
 
         if (index < 0 || p->delay_ms == 0 || (p->n_devices > 0 && !p->devices))
                 return -EINVAL;
+        for (size_t i = 0; i < p->n_devices; i++)
+                if (p->devices[i].no_select && (!p->global || !lss_node_id_valid(p->devices[i].node_id)))
+                        return -EINVAL;
         if (m->running)
                 return -EBUSY;
         memset(&m->br, 0, sizeof(m->br));

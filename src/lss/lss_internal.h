@@ -42,7 +42,9 @@ typedef struct lss_step {
         enum step_phase phase;
         uint64_t sent_at, tx_us, first_at, end_at;
         unsigned n_answers;    /* distinct answers (identical ones count once) */
+        unsigned n_frames;     /* every matching answer, identical ones too */
         lss_frame answer;      /* the first */
+        lss_frame other;       /* the first answer different from `answer` */
         bool late;             /* answered inside the late guard */
         bool void_;            /* frames were lost meanwhile: do not trust */
         bool needs_echo;       /* tx confirmation was on when the step began */
@@ -139,7 +141,7 @@ typedef struct lss_scan_state {
 } lss_scan_state;
 
 typedef struct lss_bitrate_state {
-        int pc;
+        int pc, gpc;
         lss_bitrate_params p;
         uint8_t index, old_index;
         bool can_revert;
@@ -148,6 +150,7 @@ typedef struct lss_bitrate_state {
         bool committed;
         uint64_t heard_at;      /* the slaves heard Activate Bit Timing (end of the frame on the wire) */
         enum lss_retune retune;
+        unsigned answers;       /* global: most answers to one Configure Bit Timing */
 } lss_bitrate_state;
 
 typedef int (*lss_proc_fn)(lss_master *m);
@@ -291,6 +294,9 @@ int proc_confirm_found(lss_master *m, lss_scan_state *s);
 int proc_confirm_by_selection(lss_master *m, lss_scan_state *s);
 int cand_add(lss_scan_state *s, const lss_identity *id);
 int proc_slowscan(lss_master *m, lss_scan_state *s);
+/* bitrate_global.c: steps 1 and 2 of the bit-rate change for all devices at
+ * once; on failure master_fail() was called and the devices are reverted */
+int proc_bitrate_global_configure(lss_master *m, lss_bitrate_state *s);
 void lss_autoassign_free_state(lss_master *m);
 void lss_sdo_discover_free_state(lss_master *m);
 int master_start_procedure(lss_master *m, lss_proc_fn proc, uint64_t now);

@@ -346,6 +346,11 @@ typedef struct lss_bitrate_device {
         lss_identity id;
         enum lss_bitrate_outcome outcome;
         uint8_t err, spec;          /* REFUSED, STORE_FAILED: the slave's codes */
+        /* global only: the device does not take a selective switch (found by
+         * SDO alone), so it is checked at the new rate by an SDO upload at
+         * node_id instead, and not stored */
+        bool no_select;
+        uint8_t node_id;
 } lss_bitrate_device;
 
 typedef struct lss_bitrate_params {
@@ -355,6 +360,17 @@ typedef struct lss_bitrate_params {
         bool store;                 /* Store Configuration in every switched device */
         lss_bitrate_device *devices; /* the caller's; must live until the operation is done */
         size_t n_devices;
+        /* CiA 305's global procedure instead of steps 1 and 2 below (for
+         * devices that cannot be selected one by one; lss_bitrate_global.c):
+         * Switch State Global configuration, Configure Bit Timing to all at
+         * once, every answer counted (lss_master_bitrate_answers); any
+         * refusal, or no answer at all, activates nothing (all are
+         * configured back to old_bitrate). Asked again while fewer answer
+         * than n_devices (identical answers can merge into one frame on a
+         * real bus, so fewer is no refusal). Who did not hear it, or does
+         * not answer at all, cannot be told before the activation: step 4
+         * finds it (LOST). */
+        bool global;
 } lss_bitrate_params;
 
 /* The host interface retune the engine asks its caller for, between the
@@ -382,7 +398,8 @@ const char *lss_retune_name(enum lss_retune r);
  *      Inquire Node-ID at the new rate (and stored when asked). A device
  *      silent at the new rate makes the result LSS_E_INCOMPLETE (a partial
  *      switch), a refused store LSS_E_REJECTED. Ends with every slave in
- *      waiting. Outcomes are written into p->devices. */
+ *      waiting. Outcomes are written into p->devices. A no_select device
+ *      (global only) is checked by SDO upload of 1000h at its node-ID. */
 int lss_master_set_bitrate(lss_master *m, const lss_bitrate_params *p, uint64_t now);
 /* True while the engine waits for the host interface to be retuned: to
  * `*bitrate`, best before `*deadline` (end of the first delay period). */
@@ -398,6 +415,9 @@ enum lss_retune lss_master_retune_state(const lss_master *m);
 /* From the activation until the window is over: the bus is split if the
  * operation stops now, so callers do not cancel it. */
 bool lss_master_bitrate_committed(const lss_master *m);
+/* Global procedure: the most answers to one Configure Bit Timing (a lower
+ * bound of the devices that took it). */
+unsigned lss_master_bitrate_answers(const lss_master *m);
 
 /* ---- driving ---- */
 void lss_master_on_frame(lss_master *m, const lss_frame *f, uint64_t rx_us);

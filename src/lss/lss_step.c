@@ -185,6 +185,7 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                 }
                 s->answer = *f;
                 s->n_answers = 1;
+                s->n_frames = 1;
                 s->first_at = rx;
                 if (s->phase == PHASE_LATE_GUARD) {
                         s->late = true;
@@ -197,11 +198,14 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
         /* more answers queue behind each other on the wire: wait until the
          * last one is in, so none of them leaks into the next step */
         s->end_at = rx + lss_timing_answer_guard(&m->timing);
+        s->n_frames++;
         /* two boot-ups of one node-ID: two devices took it (duplicate identity) */
         if (s->kind == STEP_BOOTUP || memcmp(s->answer.data, f->data, 8) != 0) {
                 /* a second, different answer: more than one responder */
-                if (s->n_answers == 1)
+                if (s->n_answers == 1) {
                         m->stats.conflicts++;
+                        s->other = *f;
+                }
                 s->n_answers = 2;
         }
 }

@@ -25,6 +25,9 @@
 #define LSSD_FOUND_BY_SDO    "sdo"   /* it answered the SDO upload of its identity (1018h) */
 /* Scan option (b, default true): also ask every node-ID 1..127 for 1018h by SDO */
 #define LSSD_SCAN_OPTION_SDO "sdo"
+/* SetBitrate option (b, default false): CiA 305's global procedure (all
+ * devices at once) instead of one device after another */
+#define LSSD_BITRATE_OPTION_GLOBAL "global"
 
 #define LSSD_ERROR_PREFIX          LSSD_BUS_NAME ".Error."
 #define LSSD_ERROR_NO_RESPONSE     LSSD_ERROR_PREFIX "NoResponse"

@@ -111,12 +111,15 @@ int simbus_new(uint32_t bitrate, simbus **ret) {
         return 0;
 }
 
-int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id, bool canopennode) {
+int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id, simbus_profile profile) {
         lss_slave_faults faults;
-        if (canopennode)
+        if (profile == SIMBUS_CANOPENNODE || profile == SIMBUS_CANOPENNODE_BITRATE)
                 lss_slave_faults_canopennode(&faults);
         else
                 lss_slave_faults_default(&faults);
+        faults.bit_timing_silent = profile == SIMBUS_CANOPENNODE;
+        if (profile == SIMBUS_NO_SELECTIVE_SWITCH)
+                faults.ignore_cs = LSS_CS_SWITCH_SEL_VENDOR;
         /* a little latency, as real slaves have */
         faults.latency_us = 500;
         catch_up(s);
@@ -149,7 +152,23 @@ static int parse_u32(const char *s, uint32_t *ret) {
         return 0;
 }
 
-int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id, bool *canopennode) {
+static const char *const profile_names[] = {
+        [SIMBUS_CANOPENNODE] = "canopennode",
+        [SIMBUS_CANOPENNODE_BITRATE] = "canopennode-bitrate",
+        [SIMBUS_NO_SELECTIVE_SWITCH] = "no-selective-switch",
+};
+
+static int parse_profile(const char *name, simbus_profile *ret) {
+        for (size_t i = 1; i < sizeof(profile_names) / sizeof(profile_names[0]); i++)
+                if (strcmp(name, profile_names[i]) == 0) {
+                        *ret = (simbus_profile) i;
+                        return 0;
+                }
+        return -EINVAL;
+}
+
+int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id,
+                       simbus_profile *profile) {
         char buf[128], *fields[8];
         size_t n = 0;
 
@@ -160,8 +179,8 @@ int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint
                 fields[n++] = t;
         if (n < 5 || n > 7 || strlen(fields[0]) > 15)
                 return -EINVAL;
-        *canopennode = n == 7;
-        if (n == 7 && strcmp(fields[6], "canopennode") != 0)
+        *profile = SIMBUS_PLAIN;
+        if (n == 7 && parse_profile(fields[6], profile) < 0)
                 return -EINVAL;
         if (n == 7)
                 n = 6;

@@ -15,11 +15,26 @@
 typedef struct simbus simbus;
 
 int simbus_new(uint32_t bitrate, simbus **ret);
-/* node_id 1..127 or 0xFF; canopennode: lss_slave_faults_canopennode(). */
-int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id, bool canopennode);
+/* How a simulated slave behaves (--sim-slave's last field). */
+typedef enum simbus_profile {
+        SIMBUS_PLAIN = 0,
+        SIMBUS_CANOPENNODE,         /* "canopennode": lss_slave_faults_canopennode() */
+        /* "canopennode-bitrate": the same with a bit-rate callback
+         * (CO_LSSslave_initCheckBitRateCallback): answers Configure Bit Timing */
+        SIMBUS_CANOPENNODE_BITRATE,
+        /* "no-selective-switch": ignores Switch State Selective (lss-sim's
+         * --fault ignore-cs=0x40): found by SDO only */
+        SIMBUS_NO_SELECTIVE_SWITCH,
+} simbus_profile;
+
+/* node_id 1..127 or 0xFF. */
+int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id, simbus_profile profile);
 /* The simulated bus as a transport; the transport's close() frees it. */
 void simbus_transport(simbus *s, lss_transport *ret);
 
-/* Parses "IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:canopennode]]"
- * (numbers in C notation, NODEID absent = 0xFF). -EINVAL if malformed. */
-int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id, bool *canopennode);
+/* Parses "IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:PROFILE]]"
+ * (numbers in C notation, NODEID absent = 0xFF, PROFILE one of
+ * SIMBUS_PROFILES). -EINVAL if malformed. */
+#define SIMBUS_PROFILES "canopennode, canopennode-bitrate, no-selective-switch"
+int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id,
+                       simbus_profile *profile);

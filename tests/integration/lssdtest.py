@@ -97,13 +97,16 @@ def auto_assign(env, ifname='vcan0', options=(0,)):
 
 
 class Slave:
-    def __init__(self, vendor, product, revision, serial, node_id=0xFF, faults=(), profile=None):
+    def __init__(self, vendor, product, revision, serial, node_id=0xFF, faults=(), profile=None, sim_profile=None):
         self.vendor, self.product, self.revision, self.serial = vendor, product, revision, serial
         self.node_id = node_id
         self.faults = list(faults)
-        # an lss-sim profile: 'canopennode' (the only one lssd --simulate
-        # knows too), or None for the lss-sim process's own
+        # an lss-sim profile: 'canopennode' or 'canopennode-bitrate' (lssd
+        # --simulate knows them too), or None for the lss-sim process's own
         self.profile = profile
+        # lssd --simulate's profile where lss-sim has faults instead (e.g.
+        # 'no-selective-switch' for ignore-cs=0x40): lss-sim ignores it
+        self.sim_profile = sim_profile or profile
 
     @property
     def identity(self):
@@ -115,7 +118,8 @@ class Slave:
 
     def sim_spec(self):
         """lssd --sim-slave's form (after IFACE:), which names the profile."""
-        return self.spec() + ((':' if self.node_id != 0xFF else ':0xff:') + self.profile if self.profile else '')
+        p = self.sim_profile
+        return self.spec() + ((':' if self.node_id != 0xFF else ':0xff:') + p if p else '')
 
 
 class BusctlResult:

@@ -211,7 +211,7 @@ START_TEST(sim_slave_spec) {
         char ifname[16];
         lss_identity id;
         uint8_t node;
-        bool co;
+        simbus_profile co;
         ck_assert_int_eq(simbus_slave_parse("vcan0:0xEC:0x1234:1:0x80001276", ifname, &id, &node, &co), 0);
         ck_assert_str_eq(ifname, "vcan0");
         ck_assert_uint_eq(id.vendor, 0xEC);
@@ -221,11 +221,16 @@ START_TEST(sim_slave_spec) {
         ck_assert_uint_eq(node, 127);
         ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:255", ifname, &id, &node, &co), 0);
         ck_assert_uint_eq(node, 0xFF);
-        ck_assert(!co);
+        ck_assert_int_eq(co, SIMBUS_PLAIN);
         /* a CANopenNode v4 device */
         ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:0xff:canopennode", ifname, &id, &node, &co), 0);
         ck_assert_uint_eq(node, 0xFF);
-        ck_assert(co);
+        ck_assert_int_eq(co, SIMBUS_CANOPENNODE);
+        /* the same answering Configure Bit Timing; one without selective switch */
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:9:canopennode-bitrate", ifname, &id, &node, &co), 0);
+        ck_assert_int_eq(co, SIMBUS_CANOPENNODE_BITRATE);
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:9:no-selective-switch", ifname, &id, &node, &co), 0);
+        ck_assert_int_eq(co, SIMBUS_NO_SELECTIVE_SWITCH);
         ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:plain", ifname, &id, &node, &co), -EINVAL);
         ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:canopennode:x", ifname, &id, &node, &co), -EINVAL);
         ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:0", ifname, &id, &node, &co), -EINVAL);

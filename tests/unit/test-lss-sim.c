@@ -405,7 +405,7 @@ START_TEST(profiles) {
         size_t n;
         const sim_profile *all = sim_profile_all(&n);
 
-        ck_assert_uint_eq(n, 5);
+        ck_assert_uint_eq(n, 6);
         ck_assert_ptr_eq(all, sim_profile_default());
         ck_assert_str_eq(sim_profile_default()->name, "servo-drive");
         ck_assert_ptr_null(sim_profile_find("nope"));
@@ -436,6 +436,10 @@ START_TEST(profiles) {
         sim_profile_faults(p, &f);
         ck_assert(f.no_identify);
         ck_assert(f.bit_timing_silent);
+
+        p = sim_profile_find("canopennode-bitrate");
+        sim_profile_faults(p, &f);
+        ck_assert(f.no_identify && f.canopennode_lss && !f.bit_timing_silent);
 }
 END_TEST
 
