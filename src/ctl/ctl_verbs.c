@@ -33,7 +33,20 @@ typedef struct results {
         found *v;
         size_t n;
         bool partial;             /* auto-assign: some bus does not match its map */
+        char **notes;             /* scan: "<ifname>: <note>", what lssd did not look for or identify */
+        size_t n_notes;
 } results;
+
+static int results_add_note(results *res, const char *ifname, const char *note) {
+        char **v = realloc(res->notes, (res->n_notes + 1) * sizeof(*v));
+        if (!v)
+                return -ENOMEM;
+        res->notes = v;
+        if (asprintf(&res->notes[res->n_notes], "%s: %s", ifname, note) < 0)
+                return -ENOMEM;
+        res->n_notes++;
+        return 0;
+}
 
 static int results_add(results *res, const char *ifname, const uint32_t id[4], uint8_t old_id, uint8_t new_id,
                        const char *outcome, const char *detail) {
@@ -54,6 +67,9 @@ static void results_free(results *res) {
                 free(res->v[i].detail);
         }
         free(res->v);
+        for (size_t i = 0; i < res->n_notes; i++)
+                free(res->notes[i]);
+        free(res->notes);
 }
 
 /* auto-assign outcomes that leave the bus unlike its map */
@@ -182,8 +198,9 @@ static bool sdo_only(const found *f) {
         return f->by_sdo && !f->by_lss;
 }
 
-/* scan: the count, and what the scan could not look at */
-static void print_scan_legend(const ctl_context *c, const results *res) {
+/* scan: the count, and lssd's notes: what the scan did not look for or
+ * could not identify */
+static void print_scan_legend(const results *res) {
         size_t only = 0;
         for (size_t i = 0; i < res->n; i++)
                 only += sdo_only(&res->v[i]);
@@ -191,11 +208,8 @@ static void print_scan_legend(const ctl_context *c, const results *res) {
         if (only > 0)
                 printf(", %zu by SDO only (no LSS answer: lssd cannot assign %s)", only, only == 1 ? "it" : "them");
         printf(".\n");
-        if (c->no_sdo)
-                printf("Not looked for (--no-sdo): configured devices of vendor/product pairs not in the map.\n");
-        else
-                printf("Not looked for: configured devices in NMT Stopped (no SDO) of pairs not in the map; "
-                       "lssd's journal names the node-IDs it heard but could not identify.\n");
+        for (size_t i = 0; i < res->n_notes; i++)
+                printf("Note: %s.\n", res->notes[i]);
 }
 
 static void print_results(ctl_context *c, const results *res, bool assignments) {
@@ -279,7 +293,7 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
                 if (assignments)
                         print_outcome_summary(res, c->dry_run);
                 else
-                        print_scan_legend(c, res);
+                        print_scan_legend(res);
         }
         ctl_table_free(t);
 }
@@ -461,6 +475,16 @@ static int scan_like(ctl_context *c, bool assign) {
                                 r = sd_bus_message_read(reply, "s", &result);
                         if (r >= 0 && strcmp(result, "done") != 0)
                                 res.partial = true;
+                } else if (r >= 0) {
+                        r = sd_bus_message_exit_container(reply);
+                        if (r >= 0)
+                                r = sd_bus_message_enter_container(reply, 'a', "s");
+                        while (r > 0) {
+                                const char *note;
+                                r = sd_bus_message_read(reply, "s", &note);
+                                if (r > 0 && results_add_note(&res, ifnames[i], note) < 0)
+                                        r = -ENOMEM;
+                        }
                 }
                 sd_bus_message_unref(reply);
                 if (r < 0) {

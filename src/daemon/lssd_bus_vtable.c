@@ -319,7 +319,7 @@ const sd_bus_vtable lssd_bus_vtable[] = {
 
         SD_BUS_METHOD_WITH_ARGS("Scan",
                                 SD_BUS_ARGS("a{sv}", options),
-                                SD_BUS_RESULT("a(uuuuy)", devices),
+                                SD_BUS_RESULT("a(uuuuy)", devices, "as", notes),
                                 method_scan, SD_BUS_VTABLE_UNPRIVILEGED),
         SD_BUS_METHOD_WITH_ARGS("AutoAssign",
                                 SD_BUS_ARGS("a{sv}", options),

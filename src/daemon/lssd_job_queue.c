@@ -62,6 +62,9 @@ lssd_job *lssd_job_free(lssd_job *j) {
         free(j->found);
         free(j->sdo_cand);
         free(j->announced);
+        for (size_t i = 0; i < j->n_notes; i++)
+                free(j->notes[i]);
+        free(j->notes);
         free(j->map);
         free(j->br_devices);
         free(j);
@@ -124,6 +127,17 @@ int lssd_job_add_found_by(lssd_job *j, const lss_device *d, unsigned by) {
         j->found = a;
         j->found[j->n_found++] = (lssd_scan_find) { .dev = *d, .by = by };
         return 1;
+}
+
+int lssd_job_add_note(lssd_job *j, const char *text) {
+        char **a = realloc(j->notes, (j->n_notes + 1) * sizeof(*a));
+        if (!a)
+                return -ENOMEM;
+        j->notes = a;
+        if (!(j->notes[j->n_notes] = strdup(text)))
+                return -ENOMEM;
+        j->n_notes++;
+        return 0;
 }
 
 int lssd_job_add_found(lssd_job *j, const lss_device *d) {

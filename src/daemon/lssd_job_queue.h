@@ -81,6 +81,8 @@ struct lssd_job {
         lss_identity *announced;     /* DeviceFound sent (when the engine confirmed them) */
         size_t n_announced;
         bool scan_incomplete;        /* a stage failed: devices not found are not "missing" */
+        char **notes;                /* what the scan did not look at or could not identify (the reply's) */
+        size_t n_notes;
 
         /* AUTO_ASSIGN: the engine keeps a pointer to the plan and its map until the pass ends */
         lss_autoassign_plan plan;
@@ -99,6 +101,9 @@ struct lssd_job {
         uint64_t retune_until;       /* link events before this are our own retune */
         int retune_error;            /* errno of a failed host retune */
 };
+
+/* Adds a note to the Scan reply (a copy of text); -ENOMEM. */
+int lssd_job_add_note(lssd_job *j, const char *text);
 
 /* A SET_BITRATE job in its bit-rate procedure (the scan before it is over):
  * not cancelled (Cancel, stop) while its engine operation runs, as cut off

@@ -152,6 +152,35 @@ static void scan_publish(lssd_job_env *e, lssd_job *j, uint64_t now_realtime) {
         }
 }
 
+/* The notes of the reply that every Scan of its kind has: what it did not
+ * look for, and the devices SDO found that LSS cannot address (the notes of
+ * node-IDs it could not identify were added by the SDO stage). */
+static void scan_notes(lssd_job *j) {
+        char text[320];
+        if (!j->scan_sdo) {
+                size_t n = (size_t) snprintf(text, sizeof(text), "configured devices of vendor/product pairs "
+                                             "not scanned were not looked for (option sdo = false); scanned:");
+                for (size_t i = 0; i < j->n_pairs && n < sizeof(text); i++)
+                        n += (size_t) snprintf(text + n, sizeof(text) - n, " %08x:%08x", j->pairs[i].vendor,
+                                               j->pairs[i].product);
+                if (j->n_pairs == 0 && n < sizeof(text))
+                        snprintf(text + n, sizeof(text) - n, " none");
+        } else
+                snprintf(text, sizeof(text), "configured devices in NMT Stopped that send no heartbeat were not "
+                         "looked for: they do not answer SDO; AutoAssign with nmt_stop, or Scan with their "
+                         "vendor/product, finds them");
+        (void) lssd_job_add_note(j, text);
+        for (size_t i = 0; i < j->n_found; i++) {
+                char ident[40];
+                if (j->found[i].by != LSSD_FOUND_SDO)
+                        continue;
+                snprintf(text, sizeof(text), "node %u: %s answered SDO (1018h) but not the LSS selective "
+                         "switch: lssd cannot give it a node-ID", j->found[i].dev.node_id,
+                         lssd_identity_format(&j->found[i].dev.id, ident, sizeof(ident)));
+                (void) lssd_job_add_note(j, text);
+        }
+}
+
 static void scan_log(lssd_job_env *e, lssd_job *j) {
         char line[900];
         size_t n = 0;
@@ -224,6 +253,7 @@ int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 qsort(j->found, j->n_found, sizeof(*j->found), compare_devices);
         scan_publish(e, j, lssd_realtime_us());
         scan_log(e, j);
+        scan_notes(j);
         j->result = "done";
 
         if (!j->request)
@@ -237,6 +267,12 @@ int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 k = sd_bus_message_append(reply, "(uuuuy)", f->id.vendor, f->id.product, f->id.revision, f->id.serial,
                                           f->node_id);
         }
+        if (k >= 0)
+                k = sd_bus_message_close_container(reply);
+        if (k >= 0)
+                k = sd_bus_message_open_container(reply, 'a', "s");
+        for (size_t i = 0; k >= 0 && i < j->n_notes; i++)
+                k = sd_bus_message_append(reply, "s", j->notes[i]);
         if (k >= 0)
                 k = sd_bus_message_close_container(reply);
         if (k >= 0)

@@ -2,8 +2,8 @@
 /* Scan's SDO stages: what the SDO identity discovery found becomes finds
  * (complete identities, one device per node-ID), those the LSS stages did
  * not find are confirmed through LSS next; every node-ID that answered or
- * was heard but is no device gets one journal line saying what was seen
- * and how to find it. */
+ * was heard but is no device gets one journal line and one note of the
+ * Scan reply saying what was seen and how to find it. */
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -46,36 +46,44 @@ static void missing_fields(const lss_sdo_node *n, char *buf, size_t size) {
         }
 }
 
-/* One line for a node-ID that answered or was heard but is no device of the Scan. */
-static void log_not_a_device(const lssd_job_env *e, const lssd_job *j, const lss_sdo_node *n) {
-        char what[96];
+/* One journal line and one note of the reply for a node-ID that answered
+ * or was heard but is no device of the Scan. */
+static void not_a_device(const lssd_job_env *e, lssd_job *j, const lss_sdo_node *n) {
+        char text[320], what[96];
+        bool warn = false;
         if (n->conflict) {
-                log_warning("%s: %s: node-ID %u: two devices answered SDO with different identities (1018h): "
-                            "they share the node-ID; give one of them another (lssctl assign), Scan with their "
-                            "vendor/product finds each by LSS", e->ifname, lssd_job_name(j), n->node_id);
+                warn = true;
+                snprintf(text, sizeof(text), "node-ID %u: two devices answered SDO with different identities "
+                         "(1018h): they share the node-ID; give one of them another (lssctl assign), Scan with "
+                         "their vendor/product finds each by LSS", n->node_id);
         } else if (n->source & LSS_SDO_FROM_SDO) {
                 missing_fields(n, what, sizeof(what));
-                log_notice("%s: %s: node %u answers SDO but its identity is incomplete (%s%s%08x): not "
-                           "reported; Scan with its vendor/product finds it if it answers LSS",
-                           e->ifname, lssd_job_name(j), n->node_id, what, n->aborted ? ", first abort code " : "",
-                           n->aborted ? n->abort_code : 0);
+                snprintf(text, sizeof(text), "node %u answers SDO but its identity is incomplete (%s%s%08x): not "
+                         "reported; Scan with its vendor/product finds it if it answers LSS", n->node_id, what,
+                         n->aborted ? ", first abort code " : "", n->aborted ? n->abort_code : 0);
         } else if (!node_id_found(j, n->node_id)) {
                 if (n->nmt_state == 0x04)
-                        log_notice("%s: %s: node %u sends heartbeats in NMT Stopped: it does not answer SDO; "
-                                   "AutoAssign with nmt_stop, or Scan with its vendor/product, finds it",
-                                   e->ifname, lssd_job_name(j), n->node_id);
+                        snprintf(text, sizeof(text), "node %u sends heartbeats in NMT Stopped: it does not answer "
+                                 "SDO; AutoAssign with nmt_stop, or Scan with its vendor/product, finds it",
+                                 n->node_id);
                 else
-                        log_notice("%s: %s: node %u was heard (%s) but did not answer SDO: not reported; Scan "
-                                   "with its vendor/product finds it if it answers LSS",
-                                   e->ifname, lssd_job_name(j), n->node_id, nmt_state_name(n->nmt_state));
-        }
+                        snprintf(text, sizeof(text), "node %u was heard (%s) but did not answer SDO: not reported; "
+                                 "Scan with its vendor/product finds it if it answers LSS", n->node_id,
+                                 nmt_state_name(n->nmt_state));
+        } else
+                return;
+        if (warn)
+                log_warning("%s: %s: %s", e->ifname, lssd_job_name(j), text);
+        else
+                log_notice("%s: %s: %s", e->ifname, lssd_job_name(j), text);
+        (void) lssd_job_add_note(j, text); /* out of memory: the journal has it */
 }
 
 int lssd_scan_take_sdo(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         for (size_t i = 0; i < r->n_sdo_nodes; i++) {
                 const lss_sdo_node *n = &r->sdo_nodes[i];
                 if (!(n->source & LSS_SDO_FROM_SDO) || n->conflict || n->known != IDENTITY_FIELDS_ALL) {
-                        log_not_a_device(e, j, n);
+                        not_a_device(e, j, n);
                         continue;
                 }
                 lss_device d = { .id = n->id, .node_id = n->node_id };

@@ -256,7 +256,8 @@ def test_scan():
         text = ctl.ok('scan').out
         expect('4 devices found.' in text and '0x80002468' in text, 'scan text: ' + text)
         expect('FOUND-BY' in text and 'lss,sdo' in text, 'scan text, FOUND-BY column: ' + text)
-        expect('Not looked for: configured devices in NMT Stopped' in text, 'scan legend: ' + text)
+        expect('Note: vcan0: configured devices in NMT Stopped that send no heartbeat were not looked for' in text,
+               'scan legend: ' + text)
         expect_eq(len(ctl.ok('list', '--json').json), 4, 'devices after scan')
     # no map: every slave (SDO finds the configured ones); with --no-sdo
     # configured ones only with --vendor/--product
@@ -264,8 +265,8 @@ def test_scan():
         ctl = Ctl(env)
         expect_eq(len(ctl.ok('scan', '--json', '--no-sdo').json), 1, 'scan --no-sdo without a map')
         text = ctl.ok('scan', '--no-sdo').out
-        expect('Not looked for (--no-sdo): configured devices of vendor/product pairs not in the map' in text,
-               'scan --no-sdo legend: ' + text)
+        expect('Note: vcan0: configured devices of vendor/product pairs not scanned were not looked for (option '
+               'sdo = false); scanned: none.' in text, 'scan --no-sdo legend: ' + text)
         found = ctl.ok('scan', '--json', '--no-sdo', '--vendor', '0x9A', '--product', '3').json
         expect_eq([d['serial'] for d in found], [17, 0x1276], 'scan --no-sdo --vendor 0x9A --product 3')
         found = ctl.ok('scan', '--json').json

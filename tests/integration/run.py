@@ -259,18 +259,23 @@ def test_scan_sdo():
         c = env.connect()
         lssd_signals(c)
         # LSS alone: the non-configured ones; the configured vendors are not in the map
-        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 1, 'sdo', 'b', 'false')[0]
+        found, notes = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 1, 'sdo', 'b', 'false')
         want = sorted(list(s.identity) + [s.node_id] for s in non_configured + canopennode[1:])
         expect_eq(sorted(found), want, 'Scan with sdo=false')
+        # the reply says what it did not look for
+        expect(any('pairs not scanned were not looked for (option sdo = false); scanned: 000000ec:00001234 '
+                   '0000009a:00000003' in n for n in notes), 'notes of the Scan with sdo=false: %r' % notes)
         for s in non_configured + canopennode[1:]:
             expect_eq(env.get(dev('vcan0', s), DEVICE_IFACE, 'FoundBy'), ['lss'], 'FoundBy of %x' % s.serial)
 
         expect(c.wait_signal(lambda m: m.member == 'JobFinished'), 'no JobFinished of the first Scan')
         with c.lock:
             c.signals.clear()
-        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)[0]
+        found, notes = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)
         want = sorted(list(s.identity) + [s.node_id] for s in slaves + sdo_only)
         expect_eq(sorted(found), want, 'Scan with no options')
+        expect(any('configured devices in NMT Stopped that send no heartbeat were not looked for' in n
+                   for n in notes), 'notes of the Scan: %r' % notes)
         expect_eq(found, sorted(found), 'Scan result order')
         for s in slaves + sdo_only:
             path = dev('vcan0', s)
@@ -286,6 +291,11 @@ def test_scan_sdo():
         if real:
             expect('node 70 sends heartbeats in NMT Stopped' in env.lssd_output(),
                    'no journal line about the stopped node 70')
+            expect(any(n.startswith('node 70 sends heartbeats in NMT Stopped') for n in notes),
+                   'no note about the stopped node 70: %r' % notes)
+            expect(any(n.startswith('node 60: 00006006:00000001:00000001:00000066 answered SDO (1018h) but not '
+                                    'the LSS selective switch') for n in notes),
+                   'no note about the SDO-only node 60: %r' % notes)
             # nothing changed on the slaves, all in waiting
             for s in slaves + sdo_only:
                 st = env.slave_state('vcan0', s.serial)
