@@ -15,8 +15,6 @@
 /* How long a frame the tx queue refuses is tried again before the running
  * operation fails (a frame takes 0.1..1 ms on the wire). */
 #define LSSD_TX_TIMEOUT_MS 100u
-/* Link events this long after our own retune are taken for it. */
-#define RETUNE_LINK_GRACE_US (5u * 1000000u)
 
 /* Bus PropertiesChanged bookkeeping. */
 #define LSSD_BUS_CHANGED_STATE        (1u << 0)
@@ -43,7 +41,14 @@ struct lssd_bus {
         uint32_t link_bitrate;           /* from rtnetlink for real controllers, 0 otherwise */
         bool link_virtual;               /* vcan/vxcan: frames take no time on the "wire" */
         bool link_changed;               /* the transport reported a change: handle it outside the callback */
-        sd_event_source *retune_source;  /* SetBitrate: the engine waits for the host interface */
+        struct {                         /* SetBitrate's host retune (lssd_bus_retune.c) */
+                sd_event_source *defer;  /* asked by the engine, begins from the loop */
+                sd_event_source *io, *timer; /* what the running retune waits for */
+                bool running;
+                uint32_t rate;
+                uint64_t begun_at, due;  /* due: end of the slaves' first delay period */
+                uint64_t job_id;         /* the job that retuned: link changes are asked about while it runs */
+        } retune;
 
         lss_master *engine;
         bool engine_running;             /* we started an operation and did not collect it yet */
@@ -107,8 +112,13 @@ void bus_queue_boot_pass(lssd_bus *b);
 void bus_on_holder_gone(lssd_holder *h, void *userdata);
 
 /* lssd_bus_link.c: the host interface */
-void bus_on_retune_wanted(void *userdata);
 void bus_on_link_state(void *userdata, lss_link_state old_state, lss_link_state new_state);
+void bus_after_link_change(lssd_bus *b);
+
+/* lssd_bus_retune.c: SetBitrate's host retune */
+void bus_on_retune_wanted(void *userdata);
+bool bus_retune_caused(lssd_bus *b, lss_link_state new_state);
+void bus_retune_free(lssd_bus *b);
 
 /* lssd_bus_views.c: what the registry and the job runners see */
 extern const lssd_devices_ops bus_devices_ops;
