@@ -147,12 +147,6 @@ static void bus_on_echo(lssd_bus *b, const lss_frame *f, uint64_t rx) {
         lss_master_on_tx_confirmed(b->engine, rx);
 }
 
-static void bus_note_bootup(lssd_bus *b, const lss_frame *f, uint64_t rx) {
-        uint8_t node, state;
-        if (rx <= b->env.unstored_until && bootup_decode(f, &node, &state) && state == 0)
-                b->env.unstored[node] = true;
-}
-
 static void bus_poll_rx(lssd_bus *b) {
         lss_frame f;
         uint64_t rx;
@@ -165,7 +159,7 @@ static void bus_poll_rx(lssd_bus *b) {
                 if (f.flags & LSS_FRAME_ECHO)
                         bus_on_echo(b, &f, rx);
                 else {
-                        bus_note_bootup(b, &f, rx);
+                        lssd_unstored_note(&b->env.unstored, &f, rx);
                         lssd_heard_rx(&b->heard, &f, lssd_realtime_us());
                         lss_master_on_frame(b->engine, &f, rx);
                 }

@@ -13,11 +13,8 @@
 int lssd_run_reset(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (!r) {
                 int k = lss_master_switch_global(e->engine, LSS_MODE_WAITING, lssd_job_env_now(e));
-                if (k >= 0) {
-                        lss_timing_config tc;
-                        lss_timing_config_default(&tc);
-                        e->unstored_until = lssd_job_env_now(e) + tc.bootup_timeout_us;
-                }
+                if (k >= 0)
+                        lssd_unstored_open(&e->unstored, lssd_job_env_now(e));
                 return k < 0 ? lssd_job_start_failed(e, j, k) : 1;
         }
         j->result = lssd_status_to_result(r->status);
