@@ -4,14 +4,13 @@
 #pragma once
 
 #include "can/transport.h"
+#include "can/tx_echo.h"
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_heard.h"
 #include "daemon/lssd_holder.h"
 
 /* Frames read per wake-up before the other buses get their turn. */
 #define RX_BATCH 64u
-/* how much earlier than its write an echo may read (clock conversion error), see bus_on_echo() */
-#define ECHO_CLOCK_SLACK_US 1000u
 /* How long a frame the tx queue refuses is tried again before the running
  * operation fails (a frame takes 0.1..1 ms on the wire). */
 #define LSSD_TX_TIMEOUT_MS 100u
@@ -52,9 +51,7 @@ struct lssd_bus {
 
         lss_master *engine;
         bool engine_running;             /* we started an operation and did not collect it yet */
-        lss_frame echo_want;             /* last LSS request written: its echo confirms it is on the wire */
-        uint64_t echo_want_at;           /* when it was written */
-        bool echo_pending;
+        lss_tx_echo echo;                /* which echo confirms the running step */
         lss_frame tx_frame;              /* handed out by the engine, refused by a full tx queue */
         bool tx_held;
         uint64_t tx_deadline;            /* 0 until tx_frame is first refused */
