@@ -8,12 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "can/rtnl_sock.h"
 #include "util/time_util.h"
 
-/* The kernel sizes dump messages to the largest buffer we ever read with,
- * up to 32 KiB: with this size nothing is ever truncated. */
-#define NL_BUFFER_SIZE 32768u
-#define NL_REQUEST_TIMEOUT_US 1000000u
 /* Datagrams read per rtnl_watch_process() call; the fd stays readable after. */
 #define WATCH_BATCH_MAX 256u
 
@@ -39,7 +36,7 @@ static void count_cb(const rtnl_link *link, void *userdata) {
                 c->cb(link, c->userdata);
 }
 
-static uint64_t mono_us(const can_sys *sys) {
+uint64_t rtnl_sock_now(const can_sys *sys) {
         struct timespec ts;
 
         if (sys->clock_gettime(sys->userdata, CLOCK_MONOTONIC, &ts) < 0)
@@ -47,7 +44,7 @@ static uint64_t mono_us(const can_sys *sys) {
         return timespec_to_us(&ts);
 }
 
-static int nl_open(const can_sys *sys, unsigned groups) {
+int rtnl_sock_open(const can_sys *sys, unsigned groups) {
         struct sockaddr_nl sa = { .nl_family = AF_NETLINK, .nl_groups = groups };
         int fd, r;
 
@@ -63,10 +60,9 @@ static int nl_open(const can_sys *sys, unsigned groups) {
         return fd;
 }
 
-/* One datagram from the kernel. -EAGAIN when none is pending. Anything not
- * sent by the kernel (port id 0) is dropped: any local process may send to
- * our port id, and only the kernel is to be believed about links. */
-static ssize_t nl_recv(const can_sys *sys, int fd, void *buf, size_t size) {
+/* Only the kernel (port id 0) is believed: any local process may send to
+ * our port id. */
+ssize_t rtnl_sock_recv(const can_sys *sys, int fd, void *buf, size_t size) {
         for (;;) {
                 struct sockaddr_nl sa = {};
                 struct iovec iov = { .iov_base = buf, .iov_len = size };
@@ -106,15 +102,15 @@ static int nl_transact(const can_sys *sys, int fd, void *buf, size_t len, rtnl_l
         if ((size_t) n != len)
                 return -EIO;
 
-        deadline = mono_us(sys) + NL_REQUEST_TIMEOUT_US;
+        deadline = rtnl_sock_now(sys) + RTNL_REQUEST_TIMEOUT_US;
         for (;;) {
                 uint32_t seq = want_seq; /* a malformed reply has none: it ends the request */
                 int r;
 
-                n = nl_recv(sys, fd, buf, NL_BUFFER_SIZE);
+                n = rtnl_sock_recv(sys, fd, buf, RTNL_BUFFER_SIZE);
                 if (n == -EAGAIN) {
                         struct pollfd pfd = { .fd = fd, .events = POLLIN };
-                        uint64_t now = mono_us(sys);
+                        uint64_t now = rtnl_sock_now(sys);
 
                         if (now >= deadline)
                                 return -ETIMEDOUT;
@@ -138,7 +134,7 @@ static int nl_transact(const can_sys *sys, int fd, void *buf, size_t len, rtnl_l
 static int nl_request(const can_sys *sys, void *buf, size_t len, rtnl_link_cb cb, void *userdata) {
         int fd, r;
 
-        fd = nl_open(sys, 0);
+        fd = rtnl_sock_open(sys, 0);
         if (fd < 0)
                 return fd;
         r = nl_transact(sys, fd, buf, len, cb, userdata);
@@ -153,10 +149,10 @@ int rtnl_dump_links(const can_sys *sys, rtnl_link_cb cb, void *userdata) {
 
         if (!sys)
                 sys = can_sys_default();
-        buf = malloc(NL_BUFFER_SIZE);
+        buf = malloc(RTNL_BUFFER_SIZE);
         if (!buf)
                 return -ENOMEM;
-        r = rtnl_build_getlink(buf, NL_BUFFER_SIZE, 1, 0, NULL);
+        r = rtnl_build_getlink(buf, RTNL_BUFFER_SIZE, 1, 0, NULL);
         if (r >= 0)
                 r = nl_request(sys, buf, (size_t) r, count_cb, &c);
         free(buf);
@@ -179,63 +175,16 @@ int rtnl_get_link(const can_sys *sys, const char *ifname, rtnl_link *ret) {
                 return -EINVAL;
         if (!sys)
                 sys = can_sys_default();
-        buf = malloc(NL_BUFFER_SIZE);
+        buf = malloc(RTNL_BUFFER_SIZE);
         if (!buf)
                 return -ENOMEM;
-        r = rtnl_build_getlink(buf, NL_BUFFER_SIZE, 1, 0, ifname);
+        r = rtnl_build_getlink(buf, RTNL_BUFFER_SIZE, 1, 0, ifname);
         if (r >= 0)
                 r = nl_request(sys, buf, (size_t) r, copy_first_cb, &c);
         free(buf);
         if (r < 0)
                 return r;
         return c.count > 0 ? 0 : -ENODEV;
-}
-
-int rtnl_set_can_bitrate(const can_sys *sys, const char *ifname, uint32_t bitrate) {
-        rtnl_link link;
-        void *buf = NULL;
-        int fd = -1, r, r_up;
-
-        if (bitrate == 0)
-                return -EINVAL;
-        if (!sys)
-                sys = can_sys_default();
-        r = rtnl_get_link(sys, ifname, &link);
-        if (r < 0)
-                return r;
-        if (strcmp(link.kind, "can") != 0)
-                return -EOPNOTSUPP; /* vcan, lo, ...: no bit timing to set */
-        if (link.bitrate == bitrate && (link.flags & IFF_UP))
-                return 0; /* restarting the controller would only lose frames */
-
-        buf = malloc(NL_BUFFER_SIZE);
-        if (!buf)
-                return -ENOMEM;
-        fd = nl_open(sys, 0);
-        if (fd < 0) {
-                r = fd;
-                goto out;
-        }
-        /* Down first: the kernel refuses bit timing while the controller runs (EBUSY). */
-        r = rtnl_build_set_link_up(buf, NL_BUFFER_SIZE, 1, link.ifindex, false);
-        if (r >= 0)
-                r = nl_transact(sys, fd, buf, (size_t) r, NULL, NULL);
-        if (r < 0)
-                goto out;
-        r = rtnl_build_set_can_bitrate(buf, NL_BUFFER_SIZE, 2, link.ifindex, bitrate);
-        if (r >= 0)
-                r = nl_transact(sys, fd, buf, (size_t) r, NULL, NULL);
-        /* Up again even if the rate was refused: the bus keeps its old rate. */
-        r_up = rtnl_build_set_link_up(buf, NL_BUFFER_SIZE, 3, link.ifindex, true);
-        if (r_up >= 0)
-                r_up = nl_transact(sys, fd, buf, (size_t) r_up, NULL, NULL);
-        if (r >= 0)
-                r = r_up;
-out:
-        if (fd >= 0)
-                (void) sys->close(sys->userdata, fd);
-        free(buf);
-        return r;
 }
 
 int rtnl_check_can_bitrate(const can_sys *sys, const char *ifname, rtnl_link *ret) {
@@ -255,13 +204,13 @@ int rtnl_check_can_bitrate(const can_sys *sys, const char *ifname, rtnl_link *re
         if (!(link.flags & IFF_UP) || link.bitrate == 0)
                 return -ENETDOWN;
 
-        buf = malloc(NL_BUFFER_SIZE);
+        buf = malloc(RTNL_BUFFER_SIZE);
         if (!buf)
                 return -ENOMEM;
         /* The rate it runs at: the kernel checks CAP_NET_ADMIN first (EPERM),
          * then refuses bit timing on a running controller (EBUSY) — a
          * change that is allowed and leaves the controller untouched. */
-        r = rtnl_build_set_can_bitrate(buf, NL_BUFFER_SIZE, 1, link.ifindex, link.bitrate);
+        r = rtnl_build_set_can_bitrate(buf, RTNL_BUFFER_SIZE, 1, link.ifindex, link.bitrate);
         if (r >= 0)
                 r = nl_request(sys, buf, (size_t) r, NULL, NULL);
         free(buf);
@@ -279,13 +228,13 @@ int rtnl_watch_new(const can_sys *sys, rtnl_link_cb cb, void *userdata, rtnl_wat
         w->sys = sys ? sys : can_sys_default();
         w->cb = cb;
         w->userdata = userdata;
-        w->buf = malloc(NL_BUFFER_SIZE);
+        w->buf = malloc(RTNL_BUFFER_SIZE);
         if (!w->buf) {
                 free(w);
                 return -ENOMEM;
         }
         /* RTMGRP_LINK: every RTM_NEWLINK/RTM_DELLINK, up/down and carrier changes included. */
-        w->fd = nl_open(w->sys, RTMGRP_LINK);
+        w->fd = rtnl_sock_open(w->sys, RTMGRP_LINK);
         if (w->fd < 0) {
                 int r = w->fd;
 
@@ -315,7 +264,7 @@ int rtnl_watch_process(rtnl_watch *w) {
         bool resync = false;
 
         for (unsigned i = 0; i < WATCH_BATCH_MAX; i++) {
-                ssize_t n = nl_recv(w->sys, w->fd, w->buf, NL_BUFFER_SIZE);
+                ssize_t n = rtnl_sock_recv(w->sys, w->fd, w->buf, RTNL_BUFFER_SIZE);
 
                 if (n == -EAGAIN)
                         break;

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* rtnetlink: watch network links appear, disappear and go up/down (to
  * re-open CAN ports by name), learn their current state, and set the bit rate
- * of a real CAN controller.
+ * of a real CAN controller (rtnl_retune.h).
  *
  * Start-up order, so no change is missed: rtnl_watch_new() (subscribes),
  * then rtnl_dump_links() (current state), then poll rtnl_watch_fd() and call
@@ -69,13 +69,7 @@ int rtnl_watch_process(rtnl_watch *w);
 int rtnl_dump_links(const can_sys *sys, rtnl_link_cb cb, void *userdata);
 /* One link by name; -ENODEV if there is none. */
 int rtnl_get_link(const can_sys *sys, const char *ifname, rtnl_link *ret);
-/* Sets the bit rate of a real CAN netdev: link down, IFLA_CAN_BITTIMING, link
- * up (the kernel refuses bit timing on a running controller). The link is
- * up afterwards even if the rate was refused. -EOPNOTSUPP unless the link's
- * kind is "can" (vcan has no bit rate), -ENODEV if there is no such link,
- * -EPERM without CAP_NET_ADMIN, -EINVAL for a rate the controller refuses. */
-int rtnl_set_can_bitrate(const can_sys *sys, const char *ifname, uint32_t bitrate);
-/* Whether rtnl_set_can_bitrate() would be allowed on this running
+/* Whether a retune (rtnl_retune.h) would be allowed on this running
  * controller, found out without changing anything: a bit-timing change to
  * the rate it runs at, which the kernel checks for CAP_NET_ADMIN and then
  * refuses because the controller runs. 0: allowed; -EPERM (or -EACCES)

@@ -74,9 +74,10 @@ const char *socketcan_port_ifname(const socketcan_port *p);
 int socketcan_port_ifindex(const socketcan_port *p); /* 0 when gone */
 
 /* The port as a transport (socketcan_transport.c); the transport's close()
- * frees the port. Its retune() sets the bit rate over rtnetlink (through
- * the port's can_sys) and re-opens the socket. */
-void socketcan_port_transport(socketcan_port *p, lss_transport *ret);
+ * frees the port. Its retune sets the bit rate over rtnetlink (rtnl_retune.h,
+ * through the port's can_sys) and re-opens the socket. -ENOMEM: the port
+ * is still the caller's. */
+int socketcan_port_transport(socketcan_port *p, lss_transport *ret);
 /* The system calls the port was opened with. */
 const can_sys *socketcan_port_sys(const socketcan_port *p);
 

@@ -38,9 +38,15 @@
  *    implementation picks its own): 1 when its state or fd changed, 0 when
  *    not, <0 when a re-open failed; NULL: the links of the host do not
  *    matter to it.
- *  - retune() puts the host's controller on another bit rate (SetBitrate):
- *    0 done (the fd may have changed), -EOPNOTSUPP nothing to retune, other
- *    <0 failed. Synchronous (rtnetlink on a real controller). NULL: none.
+ *  - retune_start() begins putting the host's controller on another bit
+ *    rate (SetBitrate) and never blocks: 1 done already, 0 running, -EOPNOTSUPP
+ *    nothing to retune, other <0 failed. While running, the caller calls
+ *    retune_step() when wait->fd is readable (POLLIN) or at wait->deadline
+ *    (same clock as now()), which answers the same way (wait refilled on
+ *    0). After the end the fd of the bus may have changed. NULL: none.
+ *  - retune_caused(): whether the retune made this change of link() (it
+ *    took the link down and up: those changes are its own, each once,
+ *    whenever they are reported). NULL: never.
  *  - close() frees the implementation.
  */
 #pragma once
@@ -98,6 +104,12 @@ typedef struct lss_link_event {
         unsigned flags;         /* IFF_* */
 } lss_link_event;
 
+/* What a running retune waits for. */
+typedef struct lss_retune_wait {
+        int fd;                 /* POLLIN, or -1: the deadline only */
+        uint64_t deadline;      /* same clock as now() */
+} lss_retune_wait;
+
 /* What an implementation tells its user. */
 typedef struct lss_transport_hooks {
         void (*link_changed)(void *userdata, lss_link_state old_state, lss_link_state new_state);
@@ -115,7 +127,9 @@ typedef struct lss_transport_ops {
         bool (*echoes)(void *impl);                            /* optional */
         uint64_t (*next_event)(void *impl);                    /* optional */
         int (*link_event)(void *impl, const lss_link_event *ev); /* optional */
-        int (*retune)(void *impl, uint32_t bitrate);           /* optional */
+        int (*retune_start)(void *impl, uint32_t bitrate, lss_retune_wait *wait); /* optional */
+        int (*retune_step)(void *impl, lss_retune_wait *wait);  /* with retune_start */
+        bool (*retune_caused)(void *impl, lss_link_state new_state); /* optional */
         void (*close)(void *impl);
 } lss_transport_ops;
 
@@ -165,8 +179,16 @@ static inline int lss_transport_link_event(lss_transport *t, const lss_link_even
         return t->ops->link_event ? t->ops->link_event(t->impl, ev) : -EOPNOTSUPP;
 }
 
-static inline int lss_transport_retune(lss_transport *t, uint32_t bitrate) {
-        return t->ops->retune ? t->ops->retune(t->impl, bitrate) : -EOPNOTSUPP;
+static inline int lss_transport_retune_start(lss_transport *t, uint32_t bitrate, lss_retune_wait *wait) {
+        return t->ops->retune_start ? t->ops->retune_start(t->impl, bitrate, wait) : -EOPNOTSUPP;
+}
+
+static inline int lss_transport_retune_step(lss_transport *t, lss_retune_wait *wait) {
+        return t->ops->retune_step(t->impl, wait);
+}
+
+static inline bool lss_transport_retune_caused(lss_transport *t, lss_link_state new_state) {
+        return t->ops->retune_caused && t->ops->retune_caused(t->impl, new_state);
 }
 
 /* Frees the implementation; safe on a closed (zeroed) transport. */

@@ -6,7 +6,7 @@
 #define DBUS_ERR(x) "org.freedesktop.DBus.Error." x
 
 #define CTL_ERROR_ENTRY(sym, errno_, exit_status, sentence) { LSSD_ERROR_##sym, exit_status, sentence },
-const ctl_error_info ctl_error_table[] = {
+static const ctl_error_info ctl_error_table[] = {
         LSSD_ERRORS(CTL_ERROR_ENTRY)
         /* the standard names lssd replies with, and the bus daemon's */
         { SD_BUS_ERROR_INVALID_ARGS, CTL_EXIT_USAGE, "invalid argument" },

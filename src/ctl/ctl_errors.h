@@ -33,7 +33,3 @@ typedef struct ctl_error_info {
  * not known). "lssd is not running" covers the bus daemon's
  * ServiceUnknown, NameHasNoOwner and failed activation. */
 const ctl_error_info *ctl_error_lookup(const char *name);
-
-/* The table itself, terminated by an entry with name NULL (for tests and
- * the manual). */
-extern const ctl_error_info ctl_error_table[];

@@ -133,26 +133,6 @@ void bus_process(lssd_bus *b) {
         }
 }
 
-/* Our own request came back from the controller. Only the echo of the last
- * one written confirms the running step; an older identical request's echo
- * is told apart by its time (a receive time may read up to the clock
- * conversion's error early, hence the slack). */
-static void bus_on_echo(lssd_bus *b, const lss_frame *f, uint64_t rx) {
-        if (!b->echo_pending || f->id != b->echo_want.id || f->len != b->echo_want.len ||
-            memcmp(f->data, b->echo_want.data, sizeof(f->data)) != 0)
-                return;
-        if (rx + ECHO_CLOCK_SLACK_US < b->echo_want_at)
-                return;
-        b->echo_pending = false;
-        lss_master_on_tx_confirmed(b->engine, rx);
-}
-
-static void bus_note_bootup(lssd_bus *b, const lss_frame *f, uint64_t rx) {
-        uint8_t node, state;
-        if (rx <= b->env.unstored_until && bootup_decode(f, &node, &state) && state == 0)
-                b->env.unstored[node] = true;
-}
-
 static void bus_poll_rx(lssd_bus *b) {
         lss_frame f;
         uint64_t rx;
@@ -162,10 +142,12 @@ static void bus_poll_rx(lssd_bus *b) {
                 r = lss_transport_recv(&b->transport, &f, &rx);
                 if (r <= 0)
                         break;
-                if (f.flags & LSS_FRAME_ECHO)
-                        bus_on_echo(b, &f, rx);
-                else {
-                        bus_note_bootup(b, &f, rx);
+                if (f.flags & LSS_FRAME_ECHO) {
+                        /* our own request came back from the controller */
+                        if (lss_tx_echo_confirms(&b->echo, &f, rx))
+                                lss_master_on_tx_confirmed(b->engine, rx);
+                } else {
+                        lssd_unstored_note(&b->env.unstored, &f, rx);
                         lssd_heard_rx(&b->heard, &f, lssd_realtime_us());
                         lss_master_on_frame(b->engine, &f, rx);
                 }
@@ -197,7 +179,7 @@ void bus_update_io(lssd_bus *b, bool force) {
         /* a new socket may echo or not; the engine applies it from its next step */
         lss_master_set_tx_confirm(b->engine, lss_transport_echoes(&b->transport));
         if (fd != b->io_fd)
-                b->echo_pending = false;
+                lss_tx_echo_forget(&b->echo);
         if (fd == b->io_fd && !force)
                 return;
         b->io_source = sd_event_source_disable_unref(b->io_source);

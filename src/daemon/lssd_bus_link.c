@@ -9,67 +9,6 @@
 
 /* ---- link ---- */
 
-/* SetBitrate: the engine is silent and waits for the host interface to be
- * retuned: do it through the transport (rtnetlink on a real controller, the
- * simulated bus with --simulate; skipped on vcan) and tell the engine. */
-static void bus_retune(lssd_bus *b) {
-        lssd_job *j = b->job;
-        enum lss_retune how = LSS_RETUNE_FAILED;
-        uint32_t rate;
-        uint64_t deadline, now, done;
-        int r;
-
-        if (!lss_master_retune_wanted(b->engine, &rate, &deadline))
-                return;
-        now = bus_now(b);
-        if (!j || j->type != LSSD_JOB_SET_BITRATE || !b->config->bitrate_change) {
-                if (j)
-                        j->retune_error = EPERM;
-        } else if (b->link_virtual) {
-                how = LSS_RETUNE_SKIPPED;
-        } else {
-                j->retune_until = now + RETUNE_LINK_GRACE_US;
-                r = lss_transport_retune(&b->transport, rate);
-                if (r == 0)
-                        how = LSS_RETUNE_DONE;
-                else if (r == -EOPNOTSUPP)
-                        how = LSS_RETUNE_SKIPPED;
-                else {
-                        j->retune_error = -r;
-                        log_error("%s: retuning the interface to %u bit/s failed: %s%s", b->ifname, rate,
-                                  strerror(-r), r == -EPERM ? " (lssd needs CAP_NET_ADMIN for bit-rate changes: "
-                                                              "see the lssd-bitrate.conf drop-in)" : "");
-                }
-        }
-        done = bus_now(b);
-        if (how == LSS_RETUNE_DONE && done > deadline)
-                log_warning("%s: the interface was retuned %llu us after the slaves switched", b->ifname,
-                            (unsigned long long) (done - deadline));
-        log_info("%s: SetBitrate: host interface retune: %s (%llu us)", b->ifname, lss_retune_name(how),
-                 (unsigned long long) (done - now));
-        lss_master_retune_done(b->engine, how, done);
-}
-
-static int on_retune(sd_event_source *s, void *userdata) {
-        lssd_bus *b = userdata;
-        b->retune_source = sd_event_source_disable_unref(b->retune_source);
-        bus_retune(b);
-        /* a retune re-opens the socket */
-        bus_update_io(b, true);
-        bus_process(b);
-        return 0;
-}
-
-/* The engine asks from inside a step: retune from the loop, right after. */
-void bus_on_retune_wanted(void *userdata) {
-        lssd_bus *b = userdata;
-        if (b->retune_source)
-                return;
-        int r = sd_event_add_defer(b->host.event, &b->retune_source, on_retune, b);
-        if (r < 0)
-                log_error("%s: failed to schedule the retune: %s", b->ifname, strerror(-r));
-}
-
 void bus_on_link_state(void *userdata, lss_link_state old_state, lss_link_state new_state) {
         lssd_bus *b = userdata;
         /* the fd is still open now but not after we return: forget it here */
@@ -80,7 +19,7 @@ void bus_on_link_state(void *userdata, lss_link_state old_state, lss_link_state 
         b->link_changed = true;
 }
 
-static void bus_after_link_change(lssd_bus *b) {
+void bus_after_link_change(lssd_bus *b) {
         lss_link_state old = b->link, now_state = lss_transport_link(&b->transport);
         b->link_changed = false;
         b->link = now_state;
@@ -88,7 +27,7 @@ static void bus_after_link_change(lssd_bus *b) {
         if (old == now_state)
                 return;
 
-        if (lssd_job_retuning(b->job, bus_now(b))) {
+        if (bus_retune_caused(b, now_state)) {
                 /* our own retune (down, bit timing, up): the job goes on */
                 log_info("%s: link %s (SetBitrate retune)", b->ifname, lss_link_state_to_string(now_state));
                 bus_process(b);

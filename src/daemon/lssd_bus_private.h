@@ -4,19 +4,16 @@
 #pragma once
 
 #include "can/transport.h"
+#include "can/tx_echo.h"
 #include "daemon/lssd_bus.h"
 #include "daemon/lssd_heard.h"
 #include "daemon/lssd_holder.h"
 
 /* Frames read per wake-up before the other buses get their turn. */
 #define RX_BATCH 64u
-/* how much earlier than its write an echo may read (clock conversion error), see bus_on_echo() */
-#define ECHO_CLOCK_SLACK_US 1000u
 /* How long a frame the tx queue refuses is tried again before the running
  * operation fails (a frame takes 0.1..1 ms on the wire). */
 #define LSSD_TX_TIMEOUT_MS 100u
-/* Link events this long after our own retune are taken for it. */
-#define RETUNE_LINK_GRACE_US (5u * 1000000u)
 
 /* Bus PropertiesChanged bookkeeping. */
 #define LSSD_BUS_CHANGED_STATE        (1u << 0)
@@ -43,13 +40,18 @@ struct lssd_bus {
         uint32_t link_bitrate;           /* from rtnetlink for real controllers, 0 otherwise */
         bool link_virtual;               /* vcan/vxcan: frames take no time on the "wire" */
         bool link_changed;               /* the transport reported a change: handle it outside the callback */
-        sd_event_source *retune_source;  /* SetBitrate: the engine waits for the host interface */
+        struct {                         /* SetBitrate's host retune (lssd_bus_retune.c) */
+                sd_event_source *defer;  /* asked by the engine, begins from the loop */
+                sd_event_source *io, *timer; /* what the running retune waits for */
+                bool running;
+                uint32_t rate;
+                uint64_t begun_at, due;  /* due: end of the slaves' first delay period */
+                uint64_t job_id;         /* the job that retuned: link changes are asked about while it runs */
+        } retune;
 
         lss_master *engine;
         bool engine_running;             /* we started an operation and did not collect it yet */
-        lss_frame echo_want;             /* last LSS request written: its echo confirms it is on the wire */
-        uint64_t echo_want_at;           /* when it was written */
-        bool echo_pending;
+        lss_tx_echo echo;                /* which echo confirms the running step */
         lss_frame tx_frame;              /* handed out by the engine, refused by a full tx queue */
         bool tx_held;
         uint64_t tx_deadline;            /* 0 until tx_frame is first refused */
@@ -107,8 +109,13 @@ void bus_queue_boot_pass(lssd_bus *b);
 void bus_on_holder_gone(lssd_holder *h, void *userdata);
 
 /* lssd_bus_link.c: the host interface */
-void bus_on_retune_wanted(void *userdata);
 void bus_on_link_state(void *userdata, lss_link_state old_state, lss_link_state new_state);
+void bus_after_link_change(lssd_bus *b);
+
+/* lssd_bus_retune.c: SetBitrate's host retune */
+void bus_on_retune_wanted(void *userdata);
+bool bus_retune_caused(lssd_bus *b, lss_link_state new_state);
+void bus_retune_free(lssd_bus *b);
 
 /* lssd_bus_views.c: what the registry and the job runners see */
 extern const lssd_devices_ops bus_devices_ops;

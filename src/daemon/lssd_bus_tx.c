@@ -81,11 +81,7 @@ static void tx_fail(lssd_bus *b, int err) {
 static void tx_written(lssd_bus *b, const lss_frame *f, uint64_t t) {
         b->tx_sent_at = t;
         lssd_heard_tx(&b->heard, f);
-        if (f->id == LSS_COB_MASTER && f->flags == 0) {
-                b->echo_want = *f;
-                b->echo_want_at = t;
-                b->echo_pending = true;
-        }
+        lss_tx_echo_written(&b->echo, f, t);
 }
 
 /* Writes what the engine wants sent, as far as the transport takes it. */

@@ -14,6 +14,7 @@
 #include "daemon/lssd_devices.h"
 #include "daemon/lssd_heard.h"
 #include "daemon/lssd_job_queue.h"
+#include "daemon/lssd_unstored.h"
 #include "lss/lss_autoassign.h"
 #include "lss/lss_master.h"
 
@@ -59,12 +60,7 @@ typedef struct lssd_job_env {
 
         /* AutoAssign passes */
         bool boot_pending;               /* auto_assign: the boot pass has not ended yet */
-        /* node-IDs that booted up right after a Reset: a slave that an
-         * interrupted pass configured but may not have stored took its pending
-         * ID then; the next AutoAssign stores it (lss_autoassign_plan) */
-        bool unstored[128];
-        uint64_t unstored_until;         /* end of that window after the last Reset (the
-                                          * engine's wait for a boot-up after an assignment) */
+        lssd_unstored unstored;          /* node-IDs that may not be stored */
         lssd_pass_record last_pass;
         uint64_t pass_started_us;        /* of the running AutoAssign, CLOCK_REALTIME */
 

@@ -197,6 +197,3 @@ bool lssd_job_uncancellable(const lssd_job *j) {
         return j && j->type == LSSD_JOB_SET_BITRATE && j->br_started;
 }
 
-bool lssd_job_retuning(const lssd_job *j, uint64_t now) {
-        return j && j->type == LSSD_JOB_SET_BITRATE && j->retune_until > now;
-}

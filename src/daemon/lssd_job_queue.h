@@ -98,7 +98,6 @@ struct lssd_job {
         bool br_started;             /* the discovery is over, the bit-rate procedure runs */
         lss_bitrate_device *br_devices;
         size_t n_br_devices;
-        uint64_t retune_until;       /* link events before this are our own retune */
         int retune_error;            /* errno of a failed host retune */
 };
 
@@ -110,8 +109,6 @@ int lssd_job_add_note(lssd_job *j, const char *text);
  * it could leave devices with a pending rate or the bus split; it ends
  * within seconds. */
 bool lssd_job_uncancellable(const lssd_job *j);
-/* Link down/up events at `now` are the job's own host retune: not a failure. */
-bool lssd_job_retuning(const lssd_job *j, uint64_t now);
 
 /* "Reset", "Scan", "AssignNodeId", the raw method name, "Execute", "AutoAssign",
  * "SetBitrate", "UnassignNodeId". */

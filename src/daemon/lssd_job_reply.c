@@ -20,6 +20,21 @@ void lssd_job_reply_message(lssd_job *j, sd_bus_message *reply) {
                 log_debug("Failed to send reply to %s: %s", j->sender ? j->sender : "?", strerror(-r));
 }
 
+void lssd_job_reply_done(lssd_job_env *e, lssd_job *j, const char *what, lssd_job_reply_fill fill,
+                         const void *userdata) {
+        if (!j->request)
+                return;
+        sd_bus_message *reply = NULL;
+        int k = sd_bus_message_new_method_return(j->request, &reply);
+        if (k >= 0)
+                k = fill(reply, userdata);
+        if (k >= 0)
+                lssd_job_reply_message(j, reply);
+        else
+                log_error("%s: failed to build the reply of %s: %s", e->ifname, what, strerror(-k));
+        sd_bus_message_unref(reply);
+}
+
 void lssd_job_reply_empty(lssd_job *j) {
         if (!j->request)
                 return;

@@ -81,6 +81,18 @@ static void append_sentence(char *buf, size_t size, const char *text) {
                 snprintf(buf + n, size - n, "%s%s", n ? "; " : "", text);
 }
 
+typedef struct unassign_outcome {
+        uint8_t old;
+        const lss_result *result;
+        const char *message, *warning;
+} unassign_outcome;
+
+static int fill_unassign(sd_bus_message *reply, const void *userdata) {
+        const unassign_outcome *o = userdata;
+        return sd_bus_message_append(reply, "ybbss", o->old, o->result->stored, o->result->in_effect, o->message,
+                                     o->warning);
+}
+
 int lssd_run_unassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         char ident[40];
         lssd_identity_format(&j->identity, ident, sizeof(ident));
@@ -161,16 +173,7 @@ int lssd_run_unassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         lssd_log_device(LOG_NOTICE, e->ifname, &j->identity, old, "%s: device %s: %s%s%s", e->ifname, ident, message,
                         warning[0] ? "; " : "", warning);
         j->result = "done";
-        if (!j->request)
-                return 0;
-        sd_bus_message *reply = NULL;
-        k = sd_bus_message_new_method_return(j->request, &reply);
-        if (k >= 0)
-                k = sd_bus_message_append(reply, "ybbss", old, r->stored, r->in_effect, message, warning);
-        if (k >= 0)
-                lssd_job_reply_message(j, reply);
-        else
-                log_error("%s: failed to build the reply of UnassignNodeId: %s", e->ifname, strerror(-k));
-        sd_bus_message_unref(reply);
+        const unassign_outcome o = { old, r, message, warning };
+        lssd_job_reply_done(e, j, "UnassignNodeId", fill_unassign, &o);
         return 0;
 }

@@ -151,14 +151,14 @@ int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
 
         if (!r) {
                 e->pass_started_us = now_realtime;
-                j->plan.unstored = e->unstored;
+                j->plan.unstored = lssd_unstored_table(&e->unstored);
                 lssd_taken_check(e, false);
                 lssd_run_expect_finds(e);
                 int k = lss_master_autoassign(e->engine, &j->plan, lssd_job_env_now(e));
                 return k < 0 ? lssd_job_start_failed(e, j, k) : 1;
         }
         if (r->status == LSS_OK)
-                memset(e->unstored, 0, sizeof(e->unstored));
+                lssd_unstored_forget(&e->unstored);
 
         const lss_master_stats *st = lss_master_get_stats(e->engine);
         if (st->patient_wait_us)

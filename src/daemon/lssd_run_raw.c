@@ -13,11 +13,8 @@
 int lssd_run_reset(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (!r) {
                 int k = lss_master_switch_global(e->engine, LSS_MODE_WAITING, lssd_job_env_now(e));
-                if (k >= 0) {
-                        lss_timing_config tc;
-                        lss_timing_config_default(&tc);
-                        e->unstored_until = lssd_job_env_now(e) + tc.bootup_timeout_us;
-                }
+                if (k >= 0)
+                        lssd_unstored_open(&e->unstored, lssd_job_env_now(e));
                 return k < 0 ? lssd_job_start_failed(e, j, k) : 1;
         }
         j->result = lssd_status_to_result(r->status);
@@ -34,6 +31,16 @@ int lssd_run_reset(lssd_job_env *e, lssd_job *j, const lss_result *r) {
 static bool sender_holds(lssd_job_env *e, const lssd_job *j) {
         const char *holder = e->ops->holder(e->userdata);
         return holder && j->sender && strcmp(holder, j->sender) == 0;
+}
+
+typedef struct raw_outcome {
+        const lssd_raw_step *step;
+        const lss_result *result;
+} raw_outcome;
+
+static int fill_raw(sd_bus_message *reply, const void *userdata) {
+        const raw_outcome *o = userdata;
+        return lssd_raw_step_append_result(o->step, o->result, reply, false);
 }
 
 int lssd_run_raw(lssd_job_env *e, lssd_job *j, const lss_result *r) {
@@ -67,17 +74,8 @@ int lssd_run_raw(lssd_job_env *e, lssd_job *j, const lss_result *r) {
 
         log_info("%s: %s by %s: done", e->ifname, what, j->sender ? j->sender : "?");
         j->result = "done";
-        if (!j->request)
-                return 0;
-        sd_bus_message *reply = NULL;
-        int k = sd_bus_message_new_method_return(j->request, &reply);
-        if (k >= 0)
-                k = lssd_raw_step_append_result(s, r, reply, false);
-        if (k >= 0)
-                lssd_job_reply_message(j, reply);
-        else
-                log_error("%s: failed to build the reply of %s: %s", e->ifname, what, strerror(-k));
-        sd_bus_message_unref(reply);
+        const raw_outcome o = { s, r };
+        lssd_job_reply_done(e, j, what, fill_raw, &o);
         return 0;
 }
 

@@ -217,6 +217,24 @@ static void scan_log(lssd_job_env *e, lssd_job *j) {
         }
 }
 
+/* Scan's answer: every device found, sorted, and the notes. */
+static int fill_scan(sd_bus_message *reply, const void *userdata) {
+        const lssd_job *j = userdata;
+        int k = sd_bus_message_open_container(reply, 'a', "(uuuuy)");
+        for (size_t i = 0; k >= 0 && i < j->n_found; i++) {
+                const lss_device *f = &j->found[i].dev;
+                k = sd_bus_message_append(reply, "(uuuuy)", f->id.vendor, f->id.product, f->id.revision, f->id.serial,
+                                          f->node_id);
+        }
+        if (k >= 0)
+                k = sd_bus_message_close_container(reply);
+        if (k >= 0)
+                k = sd_bus_message_open_container(reply, 'a', "s");
+        for (size_t i = 0; k >= 0 && i < j->n_notes; i++)
+                k = sd_bus_message_append(reply, "s", j->notes[i]);
+        return k < 0 ? k : sd_bus_message_close_container(reply);
+}
+
 int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (!r) {
                 j->n_stages = lssd_discover_n_stages(j);
@@ -255,30 +273,6 @@ int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         scan_log(e, j);
         scan_notes(j);
         j->result = "done";
-
-        if (!j->request)
-                return 0;
-        sd_bus_message *reply = NULL;
-        int k = sd_bus_message_new_method_return(j->request, &reply);
-        if (k >= 0)
-                k = sd_bus_message_open_container(reply, 'a', "(uuuuy)");
-        for (size_t i = 0; k >= 0 && i < j->n_found; i++) {
-                const lss_device *f = &j->found[i].dev;
-                k = sd_bus_message_append(reply, "(uuuuy)", f->id.vendor, f->id.product, f->id.revision, f->id.serial,
-                                          f->node_id);
-        }
-        if (k >= 0)
-                k = sd_bus_message_close_container(reply);
-        if (k >= 0)
-                k = sd_bus_message_open_container(reply, 'a', "s");
-        for (size_t i = 0; k >= 0 && i < j->n_notes; i++)
-                k = sd_bus_message_append(reply, "s", j->notes[i]);
-        if (k >= 0)
-                k = sd_bus_message_close_container(reply);
-        if (k >= 0)
-                lssd_job_reply_message(j, reply);
-        else
-                log_error("%s: failed to build the reply of Scan: %s", e->ifname, strerror(-k));
-        sd_bus_message_unref(reply);
+        lssd_job_reply_done(e, j, "Scan", fill_scan, j);
         return 0;
 }

@@ -35,7 +35,11 @@ int lssd_transport_open(const lssd_args *args, const char *ifname, uint32_t bitr
         int r = socketcan_port_open(ifname, &sc, &p);
         if (r < 0)
                 return r;
-        socketcan_port_transport(p, ret);
+        r = socketcan_port_transport(p, ret);
+        if (r < 0) {
+                socketcan_port_free(p);
+                return r;
+        }
         /* "link gone" alone does not say why: no such interface, or no CAN in this kernel at all */
         if (socketcan_port_state(p) == LSS_LINK_GONE && !socketcan_kernel_has_can(NULL)) {
                 log_warning("%s: serving (SocketCAN, link gone): this kernel has no CAN support (no AF_CAN "

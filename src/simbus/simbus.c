@@ -61,11 +61,11 @@ static void sim_close(void *impl) {
 }
 
 /* SetBitrate: the simulated host controller follows at once. */
-static int sim_retune(void *impl, uint32_t bitrate) {
+static int sim_retune_start(void *impl, uint32_t bitrate, lss_retune_wait *wait) {
         simbus *s = impl;
         catch_up(s);
         membus_set_bitrate(s->bus, bitrate);
-        return 0;
+        return 1;
 }
 
 static uint64_t sim_next_event(void *impl) {
@@ -81,7 +81,7 @@ static const lss_transport_ops sim_ops = {
         .get_fd = sim_get_fd,
         .now = sim_now,
         .next_event = sim_next_event,
-        .retune = sim_retune,
+        .retune_start = sim_retune_start,
         .close = sim_close,
 };
 

@@ -2,7 +2,7 @@
 /* The simulated bus of `lssd --simulate` (tests and demos without
  * SocketCAN): the in-memory bus and slave models of src/sim behind the
  * transport seam, its virtual time pinned to CLOCK_MONOTONIC. It has no fd:
- * its user wakes up at lss_transport_next_event() instead; its retune()
+ * its user wakes up at lss_transport_next_event() instead; its retune_start()
  * moves the simulated host controller to the new rate; its link is always up. */
 #pragma once
 

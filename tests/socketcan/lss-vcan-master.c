@@ -18,11 +18,16 @@
 
 #include "can/rtnl_watch.h"
 #include "can/socketcan.h"
+#include "can/tx_echo.h"
 #include "lss/lss_autoassign.h"
 #include "lss/lss_master.h"
 #include "util/time_util.h"
 
+/* The port echoes our frames (CAN_RAW_RECV_OWN_MSGS): the engine then
+ * drains by the echo, as in lssd (lss_master_set_tx_confirm()). */
 static const lss_result *drive(lss_master *m, socketcan_port *p) {
+        lss_tx_echo echo = {};
+        lss_master_set_tx_confirm(m, socketcan_port_echoes(p));
         for (;;) {
                 lss_frame f;
                 bool sent = false;
@@ -42,6 +47,7 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
                                 lss_master_on_bus_error(m, LSS_E_BUS_DOWN, strerror(-r), socketcan_port_now(p));
                                 return lss_master_result(m);
                         }
+                        lss_tx_echo_written(&echo, &f, t_send);
                         sent = true;
                 }
                 if (sent)
@@ -59,7 +65,10 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
                         if (getenv("LSS_DEBUG"))
                                 fprintf(stderr, "recv %03X %02X rx %llu now %llu\n", (unsigned) f.id, f.data[0],
                                         (unsigned long long) rx, (unsigned long long) socketcan_port_now(p));
-                        lss_master_on_frame(m, &f, rx);
+                        if (!(f.flags & LSS_FRAME_ECHO))
+                                lss_master_on_frame(m, &f, rx);
+                        else if (lss_tx_echo_confirms(&echo, &f, rx))
+                                lss_master_on_tx_confirmed(m, rx);
                 }
                 if (r < 0) {
                         lss_master_on_bus_error(m, LSS_E_BUS_DOWN, strerror(-r), socketcan_port_now(p));

@@ -10,6 +10,8 @@
 
 #include "daemon/lssd_bus.h"
 
+#include "check-main.h"
+
 typedef struct fake_host {
         uint64_t next_id;
         unsigned idle;
@@ -60,8 +62,9 @@ typedef struct fixture {
         lssd_bus *bus;
 } fixture;
 
-/* A bus on `ifname`, LSS timeout 20 ms, fixed timing, queue of 8. */
-static inline void fixture_up(fixture *f, const char *ifname, bool simulate, const lssd_bus_host_ops *ops) {
+/* The loop and the configuration of a bus on `ifname`: LSS timeout 20 ms,
+ * fixed timing, queue of 8. Change f->config before fixture_bus_new(). */
+static inline void fixture_prepare(fixture *f, const char *ifname, bool simulate) {
         memset(f, 0, sizeof(*f));
         ck_assert_int_ge(sd_event_new(&f->event), 0);
         f->args.simulate = simulate;
@@ -70,6 +73,9 @@ static inline void fixture_up(fixture *f, const char *ifname, bool simulate, con
         f->config.bitrate = 125000;
         f->config.lss_timeout_ms = 20;
         f->config.lss_timing = LSSD_LSS_TIMING_FIXED;
+}
+
+static inline void fixture_bus_new(fixture *f, const lssd_bus_host_ops *ops) {
         const lssd_bus_host host = {
                 .event = f->event,
                 .dbus = NULL,
@@ -78,6 +84,12 @@ static inline void fixture_up(fixture *f, const char *ifname, bool simulate, con
                 .userdata = &f->host,
         };
         ck_assert_int_eq(lssd_bus_new(&host, &f->config, &f->bus), 0);
+}
+
+/* fixture_prepare() and the bus. */
+static inline void fixture_up(fixture *f, const char *ifname, bool simulate, const lssd_bus_host_ops *ops) {
+        fixture_prepare(f, ifname, simulate);
+        fixture_bus_new(f, ops);
 }
 
 static inline void fixture_down(fixture *f) {
@@ -91,18 +103,4 @@ static inline uint64_t submit_scan(fixture *f) {
         ck_assert_int_eq(lssd_job_new(LSSD_JOB_SCAN, NULL, &j), 0);
         ck_assert_int_eq(lssd_bus_submit(f->bus, j, &e), 0);
         return j->id;
-}
-
-/* main() of a bus test: one test case of `name`, its tests added by `add`. */
-static inline int bus_test_main(const char *name, void (*add)(TCase *tc)) {
-        Suite *s = suite_create(name);
-        TCase *tc = tcase_create(name);
-        tcase_set_timeout(tc, 60);
-        add(tc);
-        suite_add_tcase(s, tc);
-        SRunner *sr = srunner_create(s);
-        srunner_run_all(sr, CK_NORMAL);
-        int failed = srunner_ntests_failed(sr);
-        srunner_free(sr);
-        return failed == 0 ? 0 : 1;
 }

@@ -151,5 +151,5 @@ static void add_tests(TCase *tc) {
 }
 
 int main(void) {
-        return bus_test_main("daemon-bus-queue", add_tests);
+        return check_main("daemon-bus-queue", add_tests);
 }

@@ -185,5 +185,5 @@ static void add_tests(TCase *tc) {
 }
 
 int main(void) {
-        return bus_test_main("daemon-bus-tx", add_tests);
+        return check_main("daemon-bus-tx", add_tests);
 }

@@ -1274,7 +1274,7 @@ START_TEST(as_transport) {
 
         fake_reset();
         p = open_fake(NULL);
-        socketcan_port_transport(p, &t);
+        ck_assert_int_eq(socketcan_port_transport(p, &t), 0);
         ck_assert_int_eq(lss_transport_get_fd(&t), FAKE_FD);
         ck_assert_uint_eq(lss_transport_now(&t), F.mono_us);
         ck_assert_int_eq(lss_transport_send(&t, &f), 0);
@@ -1292,6 +1292,7 @@ START_TEST(as_transport) {
         ck_assert_int_eq(lss_transport_link(&t), LSS_LINK_UP);
         ck_assert(lss_transport_echoes(&t));
         ck_assert_uint_eq(lss_transport_next_event(&t), UINT64_MAX);
+        ck_assert(!lss_transport_retune_caused(&t, LSS_LINK_DOWN)); /* it never retuned */
         lss_link_event ev = { .ifindex = 99, .ifname = "can5", .present = true, .flags = IFF_UP | IFF_RUNNING };
         ck_assert_int_eq(lss_transport_link_event(&t, &ev), 0); /* another interface */
         ev = (lss_link_event) { .ifindex = 7, .ifname = "can0", .present = true, .flags = IFF_UP };
@@ -1340,7 +1341,9 @@ START_TEST(transport_defaults_and_names) {
         ck_assert_uint_eq(lss_transport_next_event(&t), UINT64_MAX);
         lss_link_event ev = { .ifindex = 1, .ifname = "can0", .present = true };
         ck_assert_int_eq(lss_transport_link_event(&t, &ev), -EOPNOTSUPP);
-        ck_assert_int_eq(lss_transport_retune(&t, 250000), -EOPNOTSUPP);
+        lss_retune_wait w;
+        ck_assert_int_eq(lss_transport_retune_start(&t, 250000, &w), -EOPNOTSUPP);
+        ck_assert(!lss_transport_retune_caused(&t, LSS_LINK_DOWN));
         lss_transport_close(&t);
         ck_assert_ptr_null(t.impl);
 
