@@ -143,6 +143,28 @@ static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_out
         }
 }
 
+/* The reply: one outcome per device, then the verdict. */
+typedef struct aa_reply {
+        const lss_outcome *out;
+        size_t n;
+        const char *result;
+} aa_reply;
+
+static int fill_outcomes(sd_bus_message *reply, const void *userdata) {
+        const aa_reply *a = userdata;
+        int k = sd_bus_message_open_container(reply, 'a', "(uuuuyyss)");
+        for (size_t i = 0; k >= 0 && i < a->n; i++) {
+                const lss_outcome *o = &a->out[i];
+                char detail[200];
+                outcome_detail(o, detail, sizeof(detail));
+                k = sd_bus_message_append(reply, "(uuuuyyss)", o->id.vendor, o->id.product, o->id.revision,
+                                          o->id.serial, o->old_node_id, o->new_node_id, outcome_name(o), detail);
+        }
+        if (k >= 0)
+                k = sd_bus_message_close_container(reply);
+        return k < 0 ? k : sd_bus_message_append(reply, "s", a->result);
+}
+
 int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         size_t n = 0, count[LSS_OUTCOME_FAILED + 1] = { 0 };
         const lss_outcome *out;
@@ -237,27 +259,7 @@ int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                    j->summary);
         j->result = verdict;
 
-        if (!j->request)
-                return 0;
-        sd_bus_message *reply = NULL;
-        int k = sd_bus_message_new_method_return(j->request, &reply);
-        if (k >= 0)
-                k = sd_bus_message_open_container(reply, 'a', "(uuuuyyss)");
-        for (size_t i = 0; k >= 0 && i < n; i++) {
-                const lss_outcome *o = &out[i];
-                char detail[200];
-                outcome_detail(o, detail, sizeof(detail));
-                k = sd_bus_message_append(reply, "(uuuuyyss)", o->id.vendor, o->id.product, o->id.revision,
-                                          o->id.serial, o->old_node_id, o->new_node_id, outcome_name(o), detail);
-        }
-        if (k >= 0)
-                k = sd_bus_message_close_container(reply);
-        if (k >= 0)
-                k = sd_bus_message_append(reply, "s", j->result);
-        if (k >= 0)
-                lssd_job_reply_message(j, reply);
-        else
-                log_error("%s: failed to build the reply of AutoAssign: %s", e->ifname, strerror(-k));
-        sd_bus_message_unref(reply);
+        const aa_reply a = { .out = out, .n = n, .result = j->result };
+        lssd_job_reply_done(e, j, "AutoAssign", fill_outcomes, &a);
         return 0;
 }

@@ -165,22 +165,15 @@ static void log_outcomes(lssd_job_env *e, const lssd_job *j) {
 }
 
 /* The reply: every device switched, with its outcome ("stored", "switched"). */
-static int reply_devices(const lssd_job *j) {
-        sd_bus_message *reply = NULL;
-        int k = sd_bus_message_new_method_return(j->request, &reply);
-        if (k >= 0)
-                k = sd_bus_message_open_container(reply, 'a', "(uuuus)");
+static int fill_devices(sd_bus_message *reply, const void *userdata) {
+        const lssd_job *j = userdata;
+        int k = sd_bus_message_open_container(reply, 'a', "(uuuus)");
         for (size_t i = 0; k >= 0 && i < j->n_br_devices; i++) {
                 const lss_bitrate_device *d = &j->br_devices[i];
                 k = sd_bus_message_append(reply, "(uuuus)", d->id.vendor, d->id.product, d->id.revision,
                                           d->id.serial, lss_bitrate_outcome_name(d->outcome));
         }
-        if (k >= 0)
-                k = sd_bus_message_close_container(reply);
-        if (k >= 0)
-                k = sd_bus_send(NULL, reply, NULL);
-        sd_bus_message_unref(reply);
-        return k;
+        return k < 0 ? k : sd_bus_message_close_container(reply);
 }
 
 static int finish(lssd_job_env *e, lssd_job *j, const lss_result *r) {
@@ -204,12 +197,7 @@ static int finish(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 log_notice("%s: SetBitrate: %zu device%s now at %u bit/s%s", e->ifname, j->n_br_devices,
                            j->n_br_devices == 1 ? "" : "s", j->bitrate, j->bitrate_store ? ", stored" : "");
                 j->result = "done";
-                if (j->request) {
-                        int k = reply_devices(j);
-                        if (k < 0)
-                                log_debug("Failed to send reply to %s: %s", j->sender ? j->sender : "?",
-                                          strerror(-k));
-                }
+                lssd_job_reply_done(e, j, "SetBitrate", fill_devices, j);
                 return 0;
         }
         /* the host did not follow: that, not a conflict, is the cause */
