@@ -29,7 +29,7 @@ void lss_autoassign_free_state(lss_master *m) {
         m->aa = NULL;
 }
 
-static int todo_take(lss_aa_state *s, const lss_device *d, size_t n) {
+int aa_todo_take(lss_aa_state *s, const lss_device *d, size_t n) {
         s->n_todo = 0;
         if (n > s->cap_todo) {
                 lss_device *t = realloc(s->todo, n * sizeof(*t));
@@ -83,7 +83,7 @@ static bool stops(const lss_aa_state *s) {
 }
 
 /* A candidate of the replacement rule waits for the end of the pass. */
-static int cand_keep(lss_aa_state *s, const lss_device *d) {
+int aa_cand_keep(lss_aa_state *s, const lss_device *d) {
         for (size_t i = 0; i < s->n_cand; i++)
                 if (lss_identity_equal(&s->cand[i].id, &d->id))
                         return 0; /* found again by a later scan */
@@ -125,7 +125,7 @@ static bool choose_target(lss_aa_state *s) {
                 return false;
         }
         /* decided before the pool could take it */
-        if (!v && lss_replace_candidate(s->plan, s->handled, d) && cand_keep(s, d) == 0)
+        if (!v && lss_replace_candidate(s->plan, s->handled, d) && aa_cand_keep(s, d) == 0)
                 return false;
         if (s->plan->unknown == LSS_UNKNOWN_POOL && d->node_id == LSS_NODE_ID_UNCONFIGURED) {
                 s->target = pool_next(s);
@@ -145,6 +145,8 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                 if (aa_already_handled(s, &s->todo[s->t].id) || !choose_target(s))
                         continue;
                 for (;;) {
+                        if (aa_in_place(m, s, unstored_now(s)))
+                                break; /* a replacement configured at its node-ID: nothing to send */
                         memset(&m->as, 0, sizeof(m->as));
                         m->as.id = s->todo[s->t].id;
                         m->as.node_id = s->target;
@@ -223,7 +225,7 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                 m->sc.pc = m->sc.vpc = 0;
                 PT_CALL(&s->d_pc, proc_slowscan(m, &m->sc));
                 m->result.status = LSS_OK;
-                if (todo_take(s, m->devices, m->n_devices) < 0)
+                if (aa_todo_take(s, m->devices, m->n_devices) < 0)
                         continue;
                 s->i_pc = 0;
                 PT_CALL(&s->d_pc, handle_found(m, s));
@@ -256,6 +258,13 @@ static int proc_autoassign(lss_master *m) {
                 if (!s->taken[s->plan->map[i].node_id])
                         s->probe.ids[s->probe.n_ids++] = s->plan->map[i].node_id;
         PT_CALL(&s->pc, proc_probe(m, &s->probe));
+        /* 1018h by SDO (lss_autoassign_sdo.c): before the Stop, or later
+         * when the pass knows it needs it */
+        if (stops(s) && aa_sdo_wanted(s)) {
+                s->sdo_read = true;
+                s->s_pc = 0;
+                PT_CALL(&s->pc, aa_proc_sdo(m, s));
+        }
         if (stops(s)) {
                 STEP_REQUEST(m, &s->pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
                 /* give the devices time to act on it before LSS starts */
@@ -297,7 +306,7 @@ static int proc_autoassign(lss_master *m) {
                         break;
                 }
                 m->result.status = LSS_OK;
-                if (todo_take(s, m->devices, m->n_devices) < 0)
+                if (aa_todo_take(s, m->devices, m->n_devices) < 0)
                         continue;
                 s->given_before = aa_count_given(s);
                 s->i_pc = 0;
@@ -310,6 +319,17 @@ static int proc_autoassign(lss_master *m) {
                 if (s->pair == s->plan->n_map && aa_count_given(s) > s->given_before &&
                     ++s->blind_passes < LSS_NODE_ID_MAX)
                         s->pair--; /* the loop's ++ comes back to the blind enumeration */
+        }
+
+        if (!s->sdo_read && aa_sdo_wanted(s)) {
+                s->sdo_read = true;
+                s->s_pc = 0;
+                PT_CALL(&s->pc, aa_proc_sdo(m, s));
+        }
+        if (aa_sdo_resolve(s) > 0) {
+                /* entries without revision that SDO named: by their full identity */
+                s->i_pc = 0;
+                PT_CALL(&s->pc, handle_found(m, s));
         }
 
         /* 4. a present device must not be called missing because an answer
@@ -337,6 +357,7 @@ static int proc_autoassign(lss_master *m) {
 
         /* 5. what the map has and the bus has not */
         aa_report_missing(m, s);
+        aa_sdo_replacements(s);
 
         /* 6. the replacement rule (lss_replace.h), now that the pass knows
          * what is missing: the candidates take the place of the found ones */

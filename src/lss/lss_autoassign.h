@@ -15,9 +15,14 @@
  *     as a conflict and nothing is configured.
  *  6. Every assignment is verified by the boot-up of the new node-ID (NMT
  *     Reset Communication first for a device that was configured).
- *  7. With `replace`: a mapped device missing and exactly one non-configured
- *     device of its vendor/product the map does not know: that one gets the
- *     missing device's node-ID (lss_replace.h has the rule).
+ *  7. With `replace`: a mapped device missing and exactly one device of its
+ *     vendor/product the map does not know, non-configured or configured at
+ *     the missing device's node-ID: that one gets (or keeps) the missing
+ *     device's node-ID (lss_replace.h has the rule).
+ *  8. Entries without revision steps 3 and 4 left (devices without identify
+ *     services, CANopenNode), and for 7 the node-IDs of entries not found:
+ *     1018h read by SDO, before the NMT Stop of step 1 or after step 4,
+ *     only when needed (lss_autoassign_sdo.c).
  * Every slave ends in waiting state, whatever happens. */
 #pragma once
 

@@ -41,7 +41,34 @@ typedef struct lss_aa_state {
         bool avoid[128];        /* node-IDs an enumeration may not set a slave aside with */
         enum lss_status failed; /* an enumeration met a slave that does not follow CiA 305 */
         char failed_msg[160];
+        /* 1018h read by SDO (lss_autoassign_sdo.c) */
+        int s_pc;
+        bool sdo_read;          /* done in this pass (once at most) */
+        bool sdo_only[128];     /* the node-IDs it reads */
+        const lss_sdo_node *sdo_nodes; /* what it read (the engine's SDO state keeps them) */
+        size_t n_sdo_nodes;
 } lss_aa_state;
+
+/* The found devices to handle next: a copy of d[0, n). */
+int aa_todo_take(lss_aa_state *s, const lss_device *d, size_t n);
+/* Keep a device for the replacement rule (candidates). */
+int aa_cand_keep(lss_aa_state *s, const lss_device *d);
+
+/* lss_autoassign_sdo.c: whether the pass reads 1018h by SDO now, and
+ * where (sdo_only): entries without revision not found (all node-IDs),
+ * with `replace` the node-IDs of entries not found that answer. */
+bool aa_sdo_wanted(lss_aa_state *s);
+/* The reading, a child procedure (s_pc zeroed first). */
+int aa_proc_sdo(lss_master *m, lss_aa_state *s);
+/* Devices it named for entries without revision not found yet, into todo
+ * (their count). */
+size_t aa_sdo_resolve(lss_aa_state *s);
+/* With `replace`: a device the map does not know at a missing entry's
+ * node-ID, of that entry's vendor and product, is a candidate. */
+void aa_sdo_replacements(lss_aa_state *s);
+/* The replacement todo[t] already has its node-ID (and need not store it):
+ * the result of an assignment that sent nothing is set, true. */
+bool aa_in_place(lss_master *m, lss_aa_state *s, const bool *unstored);
 
 /* How many devices this pass gave a node-ID. */
 size_t aa_count_given(const lss_aa_state *s);

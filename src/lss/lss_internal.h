@@ -299,4 +299,9 @@ int proc_slowscan(lss_master *m, lss_scan_state *s);
 int proc_bitrate_global_configure(lss_master *m, lss_bitrate_state *s);
 void lss_autoassign_free_state(lss_master *m);
 void lss_sdo_discover_free_state(lss_master *m);
+/* sdo_discover.c: the SDO identity discovery as a child procedure: set up
+ * (only: 128 entries, the node-IDs of the range to ask, or NULL for all),
+ * then run proc_sdo_discover until done (result.sdo_nodes). */
+int sdo_discover_setup(lss_master *m, const lss_sdo_discover_params *p, const bool *only);
+int proc_sdo_discover(lss_master *m);
 int master_start_procedure(lss_master *m, lss_proc_fn proc, uint64_t now);

@@ -5,7 +5,10 @@
  * A device the map does not know, found non-configured by the pass's
  * enumeration, is a candidate while a map entry of its vendor and product
  * has not been found: it is kept aside (not pooled, not reported) until the
- * pass knows what is missing. Then, per vendor/product pair: exactly one
+ * pass knows what is missing. So is one that 1018h read by SDO shows at a
+ * missing entry's node-ID, of that entry's vendor and product
+ * (lss_autoassign_sdo.c); it keeps the node-ID it has, nothing is sent to
+ * it. Then, per vendor/product pair: exactly one
  * entry missing and exactly one candidate: the candidate gets that entry's
  * node-ID. More of either: nobody is replaced and the outcomes say why (a
  * guess could give a node-ID, and the stored configuration behind it, to the

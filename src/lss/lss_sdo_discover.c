@@ -278,6 +278,10 @@ static void fill_window(lss_master *m, lss_sdo_state *s) {
                         return;
         while (s->in_flight < s->window && s->next <= s->last && s->next >= s->first) {
                 sdo_slot *sl = &s->slot[s->next];
+                if (sl->state == SLOT_DONE) {
+                        s->next++; /* not asked (sdo_discover_setup's `only`) */
+                        continue;
+                }
                 sl->sub = 1;
                 sl->tries = 0;
                 s->in_flight++;
@@ -335,7 +339,7 @@ static void build_result(lss_master *m, lss_sdo_state *s) {
         m->result.n_sdo_nodes = k;
 }
 
-static int proc_sdo_discover(lss_master *m) {
+int proc_sdo_discover(lss_master *m) {
         lss_sdo_state *s = m->sdo;
 
         PT_BEGIN(&s->pc);
@@ -370,12 +374,14 @@ static int proc_sdo_discover(lss_master *m) {
         PT_END(&s->pc);
 }
 
-int lss_master_sdo_discover(lss_master *m, const lss_sdo_discover_params *p, uint64_t now) {
-        if (!lss_node_id_valid(p->first) || !lss_node_id_valid(p->last) || p->first > p->last ||
-            p->window > LSS_SDO_WINDOW_MAX)
+static bool params_ok(const lss_sdo_discover_params *p) {
+        return lss_node_id_valid(p->first) && lss_node_id_valid(p->last) && p->first <= p->last &&
+               p->window <= LSS_SDO_WINDOW_MAX;
+}
+
+int sdo_discover_setup(lss_master *m, const lss_sdo_discover_params *p, const bool *only) {
+        if (!params_ok(p))
                 return -EINVAL;
-        if (m->running)
-                return -EBUSY;
         if (!m->sdo) {
                 m->sdo = malloc(sizeof(*m->sdo));
                 if (!m->sdo)
@@ -391,5 +397,19 @@ int lss_master_sdo_discover(lss_master *m, const lss_sdo_discover_params *p, uin
         for (unsigned n = 0; n <= LSS_NODE_ID_MAX; n++)
                 for (unsigned k = 0; k <= SUBS; k++)
                         s->slot[n].asked_at[k] = NO_TIME;
-        return master_start_procedure(m, proc_sdo_discover, now);
+        for (unsigned n = s->first; only && n <= s->last; n++)
+                if (!only[n]) {
+                        s->slot[n].state = SLOT_DONE;
+                        s->done++;
+                }
+        return 0;
+}
+
+int lss_master_sdo_discover(lss_master *m, const lss_sdo_discover_params *p, uint64_t now) {
+        if (!params_ok(p))
+                return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        int r = sdo_discover_setup(m, p, NULL);
+        return r < 0 ? r : master_start_procedure(m, proc_sdo_discover, now);
 }

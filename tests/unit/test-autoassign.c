@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* Auto-assignment from a node-ID map on the in-memory bus. */
-#include "engine-util.h"
+#include "autoassign-util.h"
 #include "lss/lss_autoassign.h"
 
 typedef struct frame_count {
@@ -17,15 +17,6 @@ static void count(void *ud, const lss_frame *f, uint64_t t) {
                 c->store += f->data[0] == LSS_CS_STORE;
         }
         c->sdo += f->id >= 0x601 && f->id <= 0x67F;
-}
-
-static const lss_outcome *outcome_of(lss_master *m, const lss_identity *id) {
-        size_t n;
-        const lss_outcome *o = lss_master_outcomes(m, &n);
-        for (size_t i = 0; i < n; i++)
-                if (lss_identity_equal(&o[i].id, id))
-                        return &o[i];
-        return NULL;
 }
 
 static const lss_result *run_pass(lss_master *m, membus *b, const lss_autoassign_plan *p) {

@@ -6,7 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "engine-util.h"
+#include "autoassign-util.h"
 #include "lss/lss_autoassign.h"
 
 static lss_slave_faults canopennode(void) {
@@ -22,15 +22,6 @@ static void assert_untouched(membus *b, size_t i) {
         ck_assert_uint_eq(st->pending_node_id, 0xFF);
         ck_assert_uint_eq(st->stored_node_id, 0xFF);
         ck_assert(!st->configuration);
-}
-
-static const lss_outcome *outcome_of(lss_master *m, const lss_identity *id) {
-        size_t n;
-        const lss_outcome *o = lss_master_outcomes(m, &n);
-        for (size_t i = 0; i < n; i++)
-                if (lss_identity_equal(&o[i].id, id))
-                        return &o[i];
-        return NULL;
 }
 
 /* Scan: all four found, each set aside while the pass went on and given
