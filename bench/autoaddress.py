@@ -63,7 +63,7 @@ def bus_block(mode, slaves, ifname=IFNAME):
     return head + pool + '}', None
 
 
-def lssd_config(mode, slaves):
+def lssconf(mode, slaves):
     """libconfig text for one mode on vcan0; returns (text, {identity: node} or None for the pool)."""
     block, expected = bus_block(mode, slaves)
     return 'buses = ( %s );\n' % block, expected
@@ -126,7 +126,7 @@ def run_lssd(mode, n, rep, simulate=False, hog=False):
             raise bl.BenchFailure('%s: lssd --simulate has no lss-sim profiles' % mode)
         base = mode[:-len(PROFILE_SUFFIX)]
         sim_args += ['--profile', PROFILE_SUFFIX[1:]]
-    conf, expected = lssd_config(base, slaves)
+    conf, expected = lssconf(base, slaves)
     os.environ.setdefault('LSSD_LOG_LEVEL', 'debug')  # one line per job: the engine's counters
     os.environ['LSSD_TEST_BACKEND'] = 'simulate' if simulate else 'vcan'
     who = 'lssd%s%s %s N=%d rep %d' % (' --simulate' if simulate else '', ' (CPU hog)' if hog else '', mode, n, rep)

@@ -31,7 +31,7 @@ static void help(void) {
                "     --sim-slave IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:PROFILE]]\n"
                "                         A simulated slave on simulated bus IFACE (implies --simulate);\n"
                "                         PROFILE: " SIMBUS_PROFILES "\n",
-               LSSD_DEFAULT_CONFIG, LSSD_QUEUE_MAX_DEFAULT, LSSD_LSS_TIMEOUT_MS_DEFAULT);
+               LSSD_DEFAULT_CONFIG, LSSD_QUEUE_MAX_DEFAULT, LSSCONF_LSS_TIMEOUT_MS_DEFAULT);
 }
 
 enum {
@@ -119,8 +119,8 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                         char *end;
                         errno = 0;
                         unsigned long v = strtoul(optarg, &end, 10);
-                        if (errno || *end || v < 1 || v > LSSD_LSS_TIMEOUT_MS_MAX) {
-                                log_error("Invalid --lss-timeout '%s': 1..%u ms", optarg, LSSD_LSS_TIMEOUT_MS_MAX);
+                        if (errno || *end || v < 1 || v > LSSCONF_LSS_TIMEOUT_MS_MAX) {
+                                log_error("Invalid --lss-timeout '%s': 1..%u ms", optarg, LSSCONF_LSS_TIMEOUT_MS_MAX);
                                 return -EINVAL;
                         }
                         a->lss_timeout_ms = (unsigned) v;
@@ -170,16 +170,16 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
 
 /* --check-config: load, print every diagnostic and what would be served. */
 static int check_config(lssd_context *ctx) {
-        lssd_diag diag = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag diag = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         int r = lssd_context_read_config(ctx, &c, &diag);
 
         for (size_t i = 0; i < diag.n_messages; i++)
-                fprintf(stderr, "%s: %s\n", lssd_diag_severity_to_string(diag.messages[i].severity),
+                fprintf(stderr, "%s: %s\n", lssconf_diag_severity_to_string(diag.messages[i].severity),
                         diag.messages[i].text);
         if (diag.n_dropped)
                 fprintf(stderr, "(%zu more messages)\n", diag.n_dropped);
-        lssd_diag_clear(&diag);
+        lssconf_diag_clear(&diag);
         if (r < 0) {
                 fprintf(stderr, "Configuration is bad.\n");
                 return r;
@@ -187,16 +187,16 @@ static int check_config(lssd_context *ctx) {
         if (!c->source && c->n_buses == 0) {
                 fprintf(stderr, "Nothing to check: %s does not exist and no --bus was given (lssd --check-config "
                         "FILE).\n", LSSD_DEFAULT_CONFIG);
-                lssd_config_free(c);
+                lssconf_free(c);
                 return -ENOENT;
         }
         /* what was read, the map too: a typo shows here, not at the next boot */
         for (size_t i = 0; i < c->n_buses; i++) {
-                const lssd_bus_config *b = &c->buses[i];
-                char desc[LSSD_BUS_DESCRIBE_MAX];
-                printf("%s\n", lssd_bus_config_describe(b, desc, sizeof(desc)));
+                const lssconf_bus *b = &c->buses[i];
+                char desc[LSSCONF_BUS_DESCRIBE_MAX];
+                printf("%s\n", lssconf_bus_describe(b, desc, sizeof(desc)));
                 for (size_t k = 0; k < b->n_devices; k++) {
-                        const lssd_device_config *d = &b->devices[k];
+                        const lssconf_device *d = &b->devices[k];
                         char rev[16] = "any";
                         if (d->has_revision)
                                 snprintf(rev, sizeof(rev), "0x%08" PRIx32, d->identity.revision);
@@ -207,7 +207,7 @@ static int check_config(lssd_context *ctx) {
         }
         printf("Configuration %s is good: %zu bus%s.\n", c->source ? c->source : "(command line)", c->n_buses,
                c->n_buses == 1 ? "" : "es");
-        lssd_config_free(c);
+        lssconf_free(c);
         return 0;
 }
 
@@ -251,8 +251,8 @@ static bool bad_config;
 static int run(int argc, char *argv[]) {
         lssd_args args = { 0 };
         lssd_context *ctx = NULL;
-        lssd_config *config = NULL;
-        lssd_diag diag = LSSD_DIAG_INIT;
+        lssconf *config = NULL;
+        lssconf_diag diag = LSSCONF_DIAG_INIT;
         int r;
 
         r = parse_argv(argc, argv, &args);
@@ -277,11 +277,11 @@ static int run(int argc, char *argv[]) {
         r = lssd_context_read_config(ctx, &config, &diag);
         size_t n_errors = 0;
         for (size_t i = 0; i < diag.n_messages; i++) {
-                n_errors += diag.messages[i].severity == LSSD_DIAG_ERROR;
-                lssd_log(diag.messages[i].severity == LSSD_DIAG_ERROR ? LOG_ERR : LOG_WARNING, "%s",
+                n_errors += diag.messages[i].severity == LSSCONF_DIAG_ERROR;
+                lssd_log(diag.messages[i].severity == LSSCONF_DIAG_ERROR ? LOG_ERR : LOG_WARNING, "%s",
                          diag.messages[i].text);
         }
-        lssd_diag_clear(&diag);
+        lssconf_diag_clear(&diag);
         if (r < 0) {
                 /* the file:line lines above say why; strerror(EINVAL) only confused (seen in the boot test) */
                 if (n_errors > 0)
@@ -335,7 +335,7 @@ static int run(int argc, char *argv[]) {
                 log_error_errno(r, "Event loop failed");
 
 finish:
-        lssd_config_free(config);
+        lssconf_free(config);
         lssd_context_free(ctx);
         return r;
 }

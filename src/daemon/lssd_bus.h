@@ -14,7 +14,7 @@
 
 #include "can/rtnl_watch.h"
 #include "can/transport.h"
-#include "config/lssd_config.h"
+#include "config/lssconf.h"
 #include "daemon/lssd_args.h"
 #include "daemon/lssd_auth.h"
 #include "daemon/lssd_devices.h"
@@ -51,14 +51,14 @@ typedef struct lssd_bus_host {
 
 /* Opens the transport (a missing interface is fine), registers the object
  * and queues the first frame: switch-global waiting. */
-int lssd_bus_new(const lssd_bus_host *host, const lssd_bus_config *config, lssd_bus **ret);
+int lssd_bus_new(const lssd_bus_host *host, const lssconf_bus *config, lssd_bus **ret);
 /* Sends the queued first frame (call once lssd owns its name: a second lssd
  * must send nothing) and, with `announce`, InterfacesAdded (not for the
  * buses registered before the name was taken: nobody could see them missing). */
 void lssd_bus_start(lssd_bus *b, bool announce);
 lssd_bus *lssd_bus_free(lssd_bus *b);
 /* A new configuration (after reload): map, timing, bit rate. */
-void lssd_bus_set_config(lssd_bus *b, const lssd_bus_config *config);
+void lssd_bus_set_config(lssd_bus *b, const lssconf_bus *config);
 /* The network now runs at this rate (SetBitrate): configuration, timing,
  * Bitrate property follow; kept over reloads until lssd restarts. */
 void lssd_bus_set_bitrate(lssd_bus *b, uint32_t bitrate);
@@ -98,7 +98,7 @@ int lssd_bus_method_assign(lssd_bus *b, sd_bus_message *m, const lss_identity *i
 /* ---- what other files may read ---- */
 const char *lssd_bus_ifname(const lssd_bus *b);
 const char *lssd_bus_object_path(const lssd_bus *b);
-const lssd_bus_config *lssd_bus_config_of(const lssd_bus *b);
+const lssconf_bus *lssd_bus_config_of(const lssd_bus *b);
 lssd_auth *lssd_bus_auth(lssd_bus *b);
 lssd_devices *lssd_bus_devices(lssd_bus *b);
 /* What the job runners see of the bus. */

@@ -14,8 +14,8 @@ uint64_t bus_now(lssd_bus *b) {
         return lss_transport_now(&b->transport);
 }
 
-static lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
-        lssd_bus_config *d = malloc(sizeof(*d));
+static lssconf_bus *lssd_bus_config_dup(const lssconf_bus *c) {
+        lssconf_bus *d = malloc(sizeof(*d));
         if (!d)
                 return NULL;
         *d = *c;
@@ -31,7 +31,7 @@ static lssd_bus_config *lssd_bus_config_dup(const lssd_bus_config *c) {
         return d;
 }
 
-static lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c) {
+static lssconf_bus *lssd_bus_config_free(lssconf_bus *c) {
         if (c) {
                 free(c->devices);
                 free(c);
@@ -47,10 +47,10 @@ static lssd_bus_config *lssd_bus_config_free(lssd_bus_config *c) {
  * twentieth of the timeout. Frame times count at the bus's bit rate, except
  * on virtual interfaces, whose frames arrive the moment they are sent. */
 static void bus_timing(const lssd_bus *b, lss_timing_config *tc) {
-        const lssd_bus_config *c = b->config;
+        const lssconf_bus *c = b->config;
         lss_timing_config_default(tc);
         tc->timeout_us = c->lss_timeout_ms * 1000u;
-        tc->adaptive = c->lss_timing == LSSD_LSS_TIMING_ADAPTIVE;
+        tc->adaptive = c->lss_timing == LSSCONF_LSS_TIMING_ADAPTIVE;
         if (tc->guard_floor_us < tc->timeout_us / 20)
                 tc->guard_floor_us = tc->timeout_us / 20;
         tc->bitrate = b->link_virtual ? 0 : lssd_bus_bitrate(b);
@@ -78,7 +78,7 @@ static int bus_open_transport(lssd_bus *b) {
         return r;
 }
 
-int lssd_bus_new(const lssd_bus_host *host, const lssd_bus_config *config, lssd_bus **ret) {
+int lssd_bus_new(const lssd_bus_host *host, const lssconf_bus *config, lssd_bus **ret) {
         lss_timing_config tc;
         lssd_bus *b;
         int r;
@@ -177,8 +177,8 @@ fail:
         return r;
 }
 
-void lssd_bus_set_config(lssd_bus *b, const lssd_bus_config *config) {
-        lssd_bus_config *c = lssd_bus_config_dup(config);
+void lssd_bus_set_config(lssd_bus *b, const lssconf_bus *config) {
+        lssconf_bus *c = lssd_bus_config_dup(config);
         if (!c) {
                 log_error("%s: out of memory, keeping the previous configuration", b->ifname);
                 return;

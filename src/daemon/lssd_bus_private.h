@@ -28,7 +28,7 @@ struct lssd_bus {
         lssd_job_env env;                /* what the job runners see (points into this bus) */
         char *ifname;
         char *path;
-        lssd_bus_config *config;         /* own copy: a bus being removed outlives its configuration */
+        lssconf_bus *config;         /* own copy: a bus being removed outlives its configuration */
 
         lss_transport transport;         /* SocketCAN, the simulated bus, a test's fake: the host's choice */
         sd_event_source *io_source;

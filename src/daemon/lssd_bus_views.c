@@ -98,7 +98,7 @@ const char *lssd_bus_object_path(const lssd_bus *b) {
         return b->path;
 }
 
-const lssd_bus_config *lssd_bus_config_of(const lssd_bus *b) {
+const lssconf_bus *lssd_bus_config_of(const lssd_bus *b) {
         return b->config;
 }
 

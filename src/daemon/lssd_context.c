@@ -54,7 +54,7 @@ lssd_context *lssd_context_free(lssd_context *ctx) {
         ctx->ready_timer = sd_event_source_disable_unref(ctx->ready_timer);
         rtnl_watch_free(ctx->rtnl);
         sd_event_unref(ctx->event);
-        lssd_config_free(ctx->config);
+        lssconf_free(ctx->config);
         free(ctx->config_path);
         lssd_args_done(&ctx->args);
         free(ctx);
@@ -71,30 +71,30 @@ static const char *config_file(const lssd_context *ctx) {
         return NULL;
 }
 
-int lssd_context_read_config(lssd_context *ctx, lssd_config **ret, lssd_diag *diag) {
+int lssd_context_read_config(lssd_context *ctx, lssconf **ret, lssconf_diag *diag) {
         const char *path = config_file(ctx);
-        lssd_config *c = NULL;
+        lssconf *c = NULL;
         int r;
 
         if (path)
-                r = lssd_config_load_file(path, &c, diag);
+                r = lssconf_load_file(path, &c, diag);
         else
-                r = lssd_config_new(&c);
+                r = lssconf_new(&c);
         if (r < 0)
                 return r;
 
         for (size_t i = 0; i < ctx->args.n_buses; i++) {
                 const char *name = ctx->args.buses[i];
-                if (lssd_config_find_bus(c, name))
+                if (lssconf_find_bus(c, name))
                         continue; /* the file says more about it */
-                lssd_bus_config *b = NULL;
-                r = lssd_config_add_default_bus(c, name, &b);
+                lssconf_bus *b = NULL;
+                r = lssconf_add_default_bus(c, name, &b);
                 if (r >= 0 && ctx->args.lss_timeout_ms > 0)
                         b->lss_timeout_ms = ctx->args.lss_timeout_ms;
                 if (r < 0) {
-                        lssd_diag_add(diag, LSSD_DIAG_ERROR, "--bus %s: %s", name,
+                        lssconf_diag_add(diag, LSSCONF_DIAG_ERROR, "--bus %s: %s", name,
                                       r == -EINVAL ? "invalid interface name" : strerror(-r));
-                        lssd_config_free(c);
+                        lssconf_free(c);
                         return r;
                 }
         }
@@ -102,9 +102,9 @@ int lssd_context_read_config(lssd_context *ctx, lssd_config **ret, lssd_diag *di
         return 0;
 }
 
-static void log_diag(const lssd_diag *d) {
+static void log_diag(const lssconf_diag *d) {
         for (size_t i = 0; i < d->n_messages; i++)
-                lssd_log(d->messages[i].severity == LSSD_DIAG_ERROR ? LOG_ERR : LOG_WARNING, "%s",
+                lssd_log(d->messages[i].severity == LSSCONF_DIAG_ERROR ? LOG_ERR : LOG_WARNING, "%s",
                          d->messages[i].text);
         if (d->n_dropped > 0)
                 log_warning("(%zu more configuration messages not shown)", d->n_dropped);
@@ -162,7 +162,7 @@ static const lssd_bus_host_ops bus_host_ops = {
         .open_transport = host_open_transport,
 };
 
-static int context_add_bus(lssd_context *ctx, const lssd_bus_config *c) {
+static int context_add_bus(lssd_context *ctx, const lssconf_bus *c) {
         const lssd_bus_host host = {
                 .event = ctx->event,
                 .dbus = ctx->dbus,
@@ -180,8 +180,8 @@ static int context_add_bus(lssd_context *ctx, const lssd_bus_config *c) {
         if (r < 0)
                 return r;
         ctx->buses[ctx->n_buses++] = b;
-        char desc[LSSD_BUS_DESCRIBE_MAX];
-        log_info("%s", lssd_bus_config_describe(c, desc, sizeof(desc)));
+        char desc[LSSCONF_BUS_DESCRIBE_MAX];
+        log_info("%s", lssconf_bus_describe(c, desc, sizeof(desc)));
         if (ctx->name_owned)
                 lssd_bus_start(b, true);
         return 0;
@@ -193,13 +193,13 @@ void lssd_context_start_buses(lssd_context *ctx) {
                 lssd_bus_start(ctx->buses[i], false);
 }
 
-int lssd_context_apply_config(lssd_context *ctx, lssd_config *config) {
+int lssd_context_apply_config(lssd_context *ctx, lssconf *config) {
         bool changed = false;
         int ret = 0;
 
         for (size_t i = 0; i < ctx->n_buses; i++) {
                 lssd_bus *b = ctx->buses[i];
-                const lssd_bus_config *c = lssd_config_find_bus(config, lssd_bus_ifname(b));
+                const lssconf_bus *c = lssconf_find_bus(config, lssd_bus_ifname(b));
                 if (c) {
                         if (lssd_bus_removing(b)) {
                                 lssd_bus_set_removing(b, false);
@@ -215,7 +215,7 @@ int lssd_context_apply_config(lssd_context *ctx, lssd_config *config) {
         }
 
         for (size_t i = 0; i < config->n_buses; i++) {
-                const lssd_bus_config *c = &config->buses[i];
+                const lssconf_bus *c = &config->buses[i];
                 if (lssd_context_find_bus(ctx, c->interface))
                         continue;
                 int r = context_add_bus(ctx, c);
@@ -228,7 +228,7 @@ int lssd_context_apply_config(lssd_context *ctx, lssd_config *config) {
                 changed = true;
         }
 
-        lssd_config_free(ctx->config);
+        lssconf_free(ctx->config);
         ctx->config = config;
         if (changed)
                 lssd_context_emit_buses_changed(ctx);
@@ -236,8 +236,8 @@ int lssd_context_apply_config(lssd_context *ctx, lssd_config *config) {
 }
 
 int lssd_context_reload(lssd_context *ctx, sd_bus_error *error) {
-        lssd_diag diag = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag diag = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         const char *path = config_file(ctx);
         int r;
 
@@ -247,7 +247,7 @@ int lssd_context_reload(lssd_context *ctx, sd_bus_error *error) {
         if (r < 0) {
                 const char *first = "cannot be read";
                 for (size_t i = 0; i < diag.n_messages; i++)
-                        if (diag.messages[i].severity == LSSD_DIAG_ERROR) {
+                        if (diag.messages[i].severity == LSSCONF_DIAG_ERROR) {
                                 first = diag.messages[i].text;
                                 break;
                         }
@@ -256,10 +256,10 @@ int lssd_context_reload(lssd_context *ctx, sd_bus_error *error) {
                                       "Configuration %s: %s (%zu error%s); the previous configuration stays",
                                       path ? path : "(command line)", first, diag.n_errors,
                                       diag.n_errors == 1 ? "" : "s");
-                lssd_diag_clear(&diag);
+                lssconf_diag_clear(&diag);
                 return r;
         }
-        lssd_diag_clear(&diag);
+        lssconf_diag_clear(&diag);
 
         r = lssd_context_apply_config(ctx, c);
         if (r < 0)

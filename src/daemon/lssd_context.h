@@ -10,7 +10,7 @@
 #include <systemd/sd-event.h>
 
 #include "can/rtnl_watch.h"
-#include "config/lssd_config.h"
+#include "config/lssconf.h"
 #include "daemon/lssd_args.h"
 #include "daemon/lssd_auth.h"
 #include "daemon/lssd_bus.h"
@@ -31,7 +31,7 @@ typedef struct lssd_context {
         lssd_auth auth;
         lssd_args args;            /* owned copy */
         char *config_path;         /* the file in use, NULL when none */
-        lssd_config *config;       /* file + --bus buses; the buses point into it */
+        lssconf *config;       /* file + --bus buses; the buses point into it */
 
         lssd_bus **buses;
         size_t n_buses;
@@ -51,10 +51,10 @@ lssd_context *lssd_context_free(lssd_context *ctx);
 
 /* Reads the configuration file (if any) and adds the --bus buses. Messages go
  * to `diag`. Does not touch the buses. */
-int lssd_context_read_config(lssd_context *ctx, lssd_config **ret, lssd_diag *diag);
+int lssd_context_read_config(lssd_context *ctx, lssconf **ret, lssconf_diag *diag);
 /* Makes `config` the one in force: new buses are created, gone ones removed,
  * the others get their new map. Takes over `config`. */
-int lssd_context_apply_config(lssd_context *ctx, lssd_config *config);
+int lssd_context_apply_config(lssd_context *ctx, lssconf *config);
 /* SIGHUP and ReloadConfig(): the last good configuration stays when the new
  * one is bad (error says why). */
 int lssd_context_reload(lssd_context *ctx, sd_bus_error *error);

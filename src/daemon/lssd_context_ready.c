@@ -100,7 +100,7 @@ static uint64_t boot_pass_steps(const lssd_context *ctx) {
 }
 
 static uint64_t ready_limit_usec(const lssd_context *ctx) {
-        uint32_t s = ctx->config ? ctx->config->boot_ready_limit_s : LSSD_BOOT_READY_LIMIT_S_DEFAULT;
+        uint32_t s = ctx->config ? ctx->config->boot_ready_limit_s : LSSCONF_BOOT_READY_LIMIT_S_DEFAULT;
         return (uint64_t) s * 1000000u;
 }
 

@@ -19,7 +19,7 @@ void lssd_devices_clear(lssd_devices *ds) {
         }
 }
 
-void lssd_devices_set_config(lssd_devices *ds, const lssd_bus_config *config) {
+void lssd_devices_set_config(lssd_devices *ds, const lssconf_bus *config) {
         ds->config = config;
 }
 
@@ -40,7 +40,7 @@ lssd_device *lssd_devices_with_node_id(const lssd_devices *ds, uint8_t node_id, 
 }
 
 static uint8_t mapped_node_id(const lssd_devices *ds, const lss_identity *id) {
-        const lssd_device_config *c = ds->config ? lssd_config_lookup_device(ds->config, id) : NULL;
+        const lssconf_device *c = ds->config ? lssconf_lookup_device(ds->config, id) : NULL;
         return c ? c->node_id : 0;
 }
 

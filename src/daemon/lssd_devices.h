@@ -11,7 +11,7 @@
 #include <stdint.h>
 #include <time.h>
 
-#include "config/lssd_config.h"
+#include "config/lssconf.h"
 #include "daemon/lssd_device.h"
 #include "util/time_util.h"
 
@@ -32,7 +32,7 @@ typedef struct lssd_devices {
         size_t n;
         lssd_bus *owner;                 /* what the device objects belong to */
         const char *ifname;
-        const lssd_bus_config *config;   /* the map: mapped node-IDs */
+        const lssconf_bus *config;   /* the map: mapped node-IDs */
         const lssd_devices_ops *ops;     /* NULL: nothing published */
         void *userdata;
 } lssd_devices;
@@ -42,7 +42,7 @@ void lssd_devices_init(lssd_devices *ds, lssd_bus *owner, const char *ifname, co
 /* Removes every device (ops->removed for each). */
 void lssd_devices_clear(lssd_devices *ds);
 /* A new map (after a reload or SetBitrate): call lssd_devices_refresh() after. */
-void lssd_devices_set_config(lssd_devices *ds, const lssd_bus_config *config);
+void lssd_devices_set_config(lssd_devices *ds, const lssconf_bus *config);
 
 lssd_device *lssd_devices_find(const lssd_devices *ds, const lss_identity *id);
 /* A present device other than `except` answering to node_id, NULL if none. */

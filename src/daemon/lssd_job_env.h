@@ -10,7 +10,7 @@
 #include <systemd/sd-bus.h>
 
 #include "can/transport.h"
-#include "config/lssd_config.h"
+#include "config/lssconf.h"
 #include "daemon/lssd_devices.h"
 #include "daemon/lssd_heard.h"
 #include "daemon/lssd_job_queue.h"
@@ -53,7 +53,7 @@ typedef struct lssd_job_env {
         const char *path;                /* the bus's object path, for signals */
         sd_bus *dbus;                    /* NULL: no signals */
         lss_master *engine;
-        const lssd_bus_config *config;   /* the map in force */
+        const lssconf_bus *config;   /* the map in force */
         lssd_devices *devices;
         lssd_heard *heard;
         bool taken_with_devices;         /* lssd_taken_check() */

@@ -71,7 +71,7 @@ lssd_job *lssd_job_free(lssd_job *j) {
         return NULL;
 }
 
-int lssd_job_set_plan(lssd_job *j, const lssd_bus_config *c) {
+int lssd_job_set_plan(lssd_job *j, const lssconf_bus *c) {
         lss_map_entry *map = NULL;
 
         if (c->n_devices > 0) {
@@ -91,7 +91,7 @@ int lssd_job_set_plan(lssd_job *j, const lssd_bus_config *c) {
         j->plan = (lss_autoassign_plan) {
                 .map = map,
                 .n_map = c->n_devices,
-                .unknown = c->unknown == LSSD_UNKNOWN_POOL ? LSS_UNKNOWN_POOL : LSS_UNKNOWN_IGNORE,
+                .unknown = c->unknown == LSSCONF_UNKNOWN_POOL ? LSS_UNKNOWN_POOL : LSS_UNKNOWN_IGNORE,
                 .pool_lo = c->pool_lo,
                 .pool_hi = c->pool_hi,
                 .store = c->store,

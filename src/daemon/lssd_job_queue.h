@@ -13,7 +13,7 @@
 #include "daemon/lssd_device.h"
 #include "daemon/lssd_options.h"
 #include "daemon/lssd_raw.h"
-#include "config/lssd_config.h"
+#include "config/lssconf.h"
 #include "lss/lss_autoassign.h"
 #include "lss/lss_master.h"
 
@@ -120,7 +120,7 @@ lssd_job *lssd_job_free(lssd_job *j);
 
 /* Fills an auto-assign job's plan from a bus configuration (the map is
  * copied: a reload during the pass does not pull it away). */
-int lssd_job_set_plan(lssd_job *j, const lssd_bus_config *c);
+int lssd_job_set_plan(lssd_job *j, const lssconf_bus *c);
 
 /* Adds a vendor/product pair to a scan job unless it is there. */
 int lssd_job_add_pair(lssd_job *j, uint32_t vendor, uint32_t product);

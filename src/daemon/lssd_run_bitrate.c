@@ -100,14 +100,14 @@ static int collect_devices(lssd_job_env *e, lssd_job *j, char *unaddressable, si
                 if (!d->missing)
                         r = add_device(j, &d->id, 0, false, &cap);
         for (size_t i = 0; r >= 0 && i < e->config->n_devices; i++) {
-                const lssd_device_config *c = &e->config->devices[i];
+                const lssconf_device *c = &e->config->devices[i];
                 bool found = false;
                 if (c->has_revision) {
                         r = add_device(j, &c->identity, 0, false, &cap);
                         continue;
                 }
                 for (size_t k = 0; k < j->n_br_devices && !found; k++)
-                        found = lssd_device_config_matches(c, &j->br_devices[k].id);
+                        found = lssconf_device_matches(c, &j->br_devices[k].id);
                 if (!found && n + 40 < size)
                         n += (size_t) snprintf(unaddressable + n, size - n, "%s%08x:%08x:*:%08x", n ? ", " : "",
                                                c->identity.vendor, c->identity.product, c->identity.serial);

@@ -106,7 +106,7 @@ static void scan_announce(lssd_job_env *e, lssd_job *j, const lss_device *f, con
                 return;
         if (d)
                 (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "DeviceFound", "o", d->path);
-        if (!lssd_config_lookup_device(e->config, &f->id))
+        if (!lssconf_lookup_device(e->config, &f->id))
                 (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu", f->id.vendor,
                                           f->id.product, f->id.revision, f->id.serial);
 }

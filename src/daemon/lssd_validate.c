@@ -2,7 +2,7 @@
 #include <ctype.h>
 #include <string.h>
 
-#include "config/lssd_config.h"
+#include "config/lssconf.h"
 #include "daemon/lssd_validate.h"
 #include "lss/lss_proto.h"
 
@@ -61,7 +61,7 @@ int lssd_validate_range(const char *lo_argument, uint32_t lo, const char *hi_arg
 }
 
 int lssd_validate_ifname(const char *argument, const char *ifname, sd_bus_error *error) {
-        if (lssd_ifname_valid(ifname))
+        if (lssconf_ifname_valid(ifname))
                 return 0;
         /* quote at most the first 32 characters of whatever came in, printable only */
         char shown[33];

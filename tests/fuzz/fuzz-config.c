@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "config/lssd_config.h"
+#include "config/lssconf.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -14,12 +14,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
                 return 0;
         memcpy(text, data, size);
         text[size] = 0;
-        lssd_config *c = NULL;
-        lssd_diag diag;
-        lssd_diag_init(&diag);
-        if (lssd_config_load_buffer(text, size, "fuzz.conf", &c, &diag) == 0)
-                lssd_config_free(c);
-        lssd_diag_clear(&diag);
+        lssconf *c = NULL;
+        lssconf_diag diag;
+        lssconf_diag_init(&diag);
+        if (lssconf_load_buffer(text, size, "fuzz.conf", &c, &diag) == 0)
+                lssconf_free(c);
+        lssconf_diag_clear(&diag);
         free(text);
         return 0;
 }

@@ -58,7 +58,7 @@ typedef struct fixture {
         sd_event *event;
         fake_host host;
         lssd_args args;
-        lssd_bus_config config;
+        lssconf_bus config;
         lssd_bus *bus;
 } fixture;
 
@@ -72,7 +72,7 @@ static inline void fixture_prepare(fixture *f, const char *ifname, bool simulate
         snprintf(f->config.interface, sizeof(f->config.interface), "%s", ifname);
         f->config.bitrate = 125000;
         f->config.lss_timeout_ms = 20;
-        f->config.lss_timing = LSSD_LSS_TIMING_FIXED;
+        f->config.lss_timing = LSSCONF_LSS_TIMING_FIXED;
 }
 
 static inline void fixture_bus_new(fixture *f, const lssd_bus_host_ops *ops) {

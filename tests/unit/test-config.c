@@ -8,7 +8,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "config/lssd_config.h"
+#include "config/lssconf.h"
 #include "sim/sim_random.h"
 #include "util/time_util.h"
 
@@ -39,26 +39,26 @@ static char *write_temp(const char *text, size_t len) {
 }
 
 /* Loads text through a real file, as the daemon does. */
-static int load_len(const char *text, size_t len, lssd_config **ret, lssd_diag *d) {
+static int load_len(const char *text, size_t len, lssconf **ret, lssconf_diag *d) {
         char *path = write_temp(text, len);
-        int r = lssd_config_load_file(path, ret, d);
+        int r = lssconf_load_file(path, ret, d);
         ck_assert_int_eq(unlink(path), 0);
         free(path);
         /* the contract: config on success only, and an error message on failure */
         if (r < 0) {
                 ck_assert_ptr_null(*ret);
-                ck_assert(lssd_diag_has_errors(d));
+                ck_assert(lssconf_diag_has_errors(d));
         } else
                 ck_assert_ptr_nonnull(*ret);
         return r;
 }
 
-static int load(const char *text, lssd_config **ret, lssd_diag *d) {
+static int load(const char *text, lssconf **ret, lssconf_diag *d) {
         return load_len(text, strlen(text), ret, d);
 }
 
 /* A message of that severity containing every one of the NULL-terminated substrings. */
-static bool has_message(const lssd_diag *d, lssd_diag_severity sev, ...) {
+static bool has_message(const lssconf_diag *d, lssconf_diag_severity sev, ...) {
         for (size_t i = 0; i < d->n_messages; i++) {
                 if (d->messages[i].severity != sev)
                         continue;
@@ -75,9 +75,9 @@ static bool has_message(const lssd_diag *d, lssd_diag_severity sev, ...) {
         return false;
 }
 
-static void dump(const lssd_diag *d) {
+static void dump(const lssconf_diag *d) {
         for (size_t i = 0; i < d->n_messages; i++)
-                fprintf(stderr, "  %s: %s\n", lssd_diag_severity_to_string(d->messages[i].severity),
+                fprintf(stderr, "  %s: %s\n", lssconf_diag_severity_to_string(d->messages[i].severity),
                         d->messages[i].text);
 }
 
@@ -85,22 +85,22 @@ static void dump(const lssd_diag *d) {
         do { \
                 if (!has_message(d, sev, __VA_ARGS__, (const char *) NULL)) { \
                         dump(d); \
-                        ck_abort_msg("no %s with: %s", lssd_diag_severity_to_string(sev), #__VA_ARGS__); \
+                        ck_abort_msg("no %s with: %s", lssconf_diag_severity_to_string(sev), #__VA_ARGS__); \
                 } \
         } while (0)
 
 /* The text must fail to load with an error carrying all the substrings. */
 #define expect_load_error(text, ...) \
         do { \
-                lssd_diag _d = LSSD_DIAG_INIT; \
-                lssd_config *_c = NULL; \
+                lssconf_diag _d = LSSCONF_DIAG_INIT; \
+                lssconf *_c = NULL; \
                 ck_assert_int_eq(load(text, &_c, &_d), -EINVAL); \
-                expect_message(&_d, LSSD_DIAG_ERROR, __VA_ARGS__); \
-                lssd_diag_clear(&_d); \
+                expect_message(&_d, LSSCONF_DIAG_ERROR, __VA_ARGS__); \
+                lssconf_diag_clear(&_d); \
         } while (0)
 
 /* One device entry in an otherwise valid bus. */
-static int load_device(const char *device, lssd_config **ret, lssd_diag *d) {
+static int load_device(const char *device, lssconf **ret, lssconf_diag *d) {
         char *text;
         ck_assert_int_ge(asprintf(&text,
                                   "buses = (\n"
@@ -117,7 +117,7 @@ static int load_device(const char *device, lssd_config **ret, lssd_diag *d) {
 }
 
 /* One key set in a bus that is otherwise minimal. */
-static int load_bus_key(const char *key_value, lssd_config **ret, lssd_diag *d) {
+static int load_bus_key(const char *key_value, lssconf **ret, lssconf_diag *d) {
         char *text;
         ck_assert_int_ge(asprintf(&text,
                                   "buses = (\n"
@@ -135,9 +135,9 @@ static int load_bus_key(const char *key_value, lssd_config **ret, lssd_diag *d) 
 
 START_TEST(example_conf_loads_cleanly) {
         char *path = test_data_path("../../conf/lssd.conf");
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
-        int r = lssd_config_load_file(path, &c, &d);
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
+        int r = lssconf_load_file(path, &c, &d);
         if (r < 0 || d.n_messages)
                 dump(&d);
         ck_assert_int_eq(r, 0);
@@ -145,15 +145,15 @@ START_TEST(example_conf_loads_cleanly) {
         ck_assert_str_eq(c->source, path);
 
         ck_assert_uint_eq(c->lss_timeout_ms, 20);
-        ck_assert_int_eq(c->lss_timing, LSSD_LSS_TIMING_ADAPTIVE);
+        ck_assert_int_eq(c->lss_timing, LSSCONF_LSS_TIMING_ADAPTIVE);
         ck_assert_uint_eq(c->boot_ready_limit_s, 1800); /* commented out: the default */
         ck_assert_uint_eq(c->n_buses, 2);
-        const lssd_bus_config *b = lssd_config_find_bus(c, "can0");
+        const lssconf_bus *b = lssconf_find_bus(c, "can0");
         ck_assert_ptr_eq(b, &c->buses[0]);
         ck_assert_uint_eq(b->bitrate, 250000);
         ck_assert(b->auto_assign);
         ck_assert(b->store);
-        ck_assert_int_eq(b->unknown, LSSD_UNKNOWN_POOL);
+        ck_assert_int_eq(b->unknown, LSSCONF_UNKNOWN_POOL);
         ck_assert_uint_eq(b->pool_lo, 100);
         ck_assert_uint_eq(b->pool_hi, 110);
         ck_assert_uint_eq(b->lss_timeout_ms, 20);
@@ -164,51 +164,51 @@ START_TEST(example_conf_loads_cleanly) {
         ck_assert_uint_eq(b->devices[3].identity.serial, 0xFFFFFFFFu);
         ck_assert_uint_eq(b->devices[3].identity.vendor, 0xEC);
 
-        const lssd_bus_config *b1 = lssd_config_find_bus(c, "can1");
+        const lssconf_bus *b1 = lssconf_find_bus(c, "can1");
         ck_assert_ptr_eq(b1, &c->buses[1]);
         ck_assert_uint_eq(b1->n_devices, 0);
         ck_assert(!b1->auto_assign);
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
         free(path);
 }
 END_TEST
 
 START_TEST(all_keys) {
         char *path = test_data_path("config/all-keys.conf");
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
-        int r = lssd_config_load_file(path, &c, &d);
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
+        int r = lssconf_load_file(path, &c, &d);
         if (r < 0 || d.n_messages)
                 dump(&d);
         ck_assert_int_eq(r, 0);
         ck_assert_uint_eq(d.n_messages, 0);
 
         ck_assert_uint_eq(c->lss_timeout_ms, 35);
-        ck_assert_int_eq(c->lss_timing, LSSD_LSS_TIMING_FIXED);
+        ck_assert_int_eq(c->lss_timing, LSSCONF_LSS_TIMING_FIXED);
         ck_assert_uint_eq(c->boot_ready_limit_s, 600);
         ck_assert_uint_eq(c->n_buses, 2);
 
-        const lssd_bus_config *b = &c->buses[0];
+        const lssconf_bus *b = &c->buses[0];
         ck_assert_str_eq(b->interface, "can0");
         ck_assert_uint_eq(b->line, 5);
         ck_assert_uint_eq(b->bitrate, 500000);
         ck_assert(b->auto_assign);
         ck_assert(!b->store);
-        ck_assert_int_eq(b->unknown, LSSD_UNKNOWN_POOL);
+        ck_assert_int_eq(b->unknown, LSSCONF_UNKNOWN_POOL);
         ck_assert_uint_eq(b->pool_lo, 120);
         ck_assert_uint_eq(b->pool_hi, 126);
         ck_assert(b->nmt_stop);
         ck_assert(b->replace);
         ck_assert_uint_eq(b->lss_timeout_ms, 50);
-        ck_assert_int_eq(b->lss_timing, LSSD_LSS_TIMING_ADAPTIVE);
+        ck_assert_int_eq(b->lss_timing, LSSCONF_LSS_TIMING_ADAPTIVE);
         ck_assert(b->has_vendor && b->has_product);
         ck_assert_uint_eq(b->vendor, 0xEC);
         ck_assert_uint_eq(b->product, 0x1234);
         ck_assert(b->bitrate_change);
         ck_assert_uint_eq(b->n_devices, 4);
 
-        const lssd_device_config *dev = &b->devices[0];
+        const lssconf_device *dev = &b->devices[0];
         ck_assert_uint_eq(dev->identity.vendor, 0xEC);
         ck_assert_uint_eq(dev->identity.product, 0x1234);
         ck_assert_uint_eq(dev->identity.serial, 0x1276);
@@ -228,41 +228,41 @@ START_TEST(all_keys) {
         ck_assert_str_eq(b->interface, "vcan-test_1.x");
         ck_assert_uint_eq(b->bitrate, 10000);
         ck_assert_uint_eq(b->lss_timeout_ms, 35);
-        ck_assert_int_eq(b->lss_timing, LSSD_LSS_TIMING_FIXED);
-        ck_assert_int_eq(b->unknown, LSSD_UNKNOWN_POOL);
+        ck_assert_int_eq(b->lss_timing, LSSCONF_LSS_TIMING_FIXED);
+        ck_assert_int_eq(b->unknown, LSSCONF_UNKNOWN_POOL);
         ck_assert_uint_eq(b->pool_lo, 1);
         ck_assert_uint_eq(b->pool_hi, 1);
         ck_assert(!b->has_vendor && !b->has_product);
         ck_assert(b->store);
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
         free(path);
 }
 END_TEST
 
 START_TEST(defaults) {
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         ck_assert_int_eq(load("buses = ( { interface = \"can0\"; } );\n", &c, &d), 0);
         ck_assert_uint_eq(d.n_messages, 0);
-        ck_assert_uint_eq(c->lss_timeout_ms, LSSD_LSS_TIMEOUT_MS_DEFAULT);
-        ck_assert_int_eq(c->lss_timing, LSSD_LSS_TIMING_ADAPTIVE);
+        ck_assert_uint_eq(c->lss_timeout_ms, LSSCONF_LSS_TIMEOUT_MS_DEFAULT);
+        ck_assert_int_eq(c->lss_timing, LSSCONF_LSS_TIMING_ADAPTIVE);
         ck_assert_uint_eq(c->boot_ready_limit_s, 1800);
-        ck_assert_uint_eq(LSSD_BOOT_READY_LIMIT_S_DEFAULT, 1800);
-        const lssd_bus_config *b = &c->buses[0];
+        ck_assert_uint_eq(LSSCONF_BOOT_READY_LIMIT_S_DEFAULT, 1800);
+        const lssconf_bus *b = &c->buses[0];
         ck_assert_uint_eq(b->bitrate, 125000);
         ck_assert(!b->auto_assign);
         ck_assert(b->store);
         ck_assert(!b->nmt_stop);
         ck_assert(!b->replace);
         ck_assert(!b->bitrate_change);
-        ck_assert_int_eq(b->unknown, LSSD_UNKNOWN_IGNORE);
+        ck_assert_int_eq(b->unknown, LSSCONF_UNKNOWN_IGNORE);
         ck_assert_uint_eq(b->lss_timeout_ms, 20);
-        ck_assert_int_eq(b->lss_timing, LSSD_LSS_TIMING_ADAPTIVE);
+        ck_assert_int_eq(b->lss_timing, LSSCONF_LSS_TIMING_ADAPTIVE);
         ck_assert_uint_eq(b->n_devices, 0);
         ck_assert_ptr_null(b->devices);
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
@@ -272,13 +272,13 @@ START_TEST(every_bitrate) {
                 if (!rate)
                         continue;
                 char kv[64];
-                lssd_diag d = LSSD_DIAG_INIT;
-                lssd_config *c = NULL;
+                lssconf_diag d = LSSCONF_DIAG_INIT;
+                lssconf *c = NULL;
                 snprintf(kv, sizeof(kv), "bitrate = %u;", rate);
                 ck_assert_int_eq(load_bus_key(kv, &c, &d), 0);
                 ck_assert_uint_eq(c->buses[0].bitrate, rate);
-                lssd_config_free(c);
-                lssd_diag_clear(&d);
+                lssconf_free(c);
+                lssconf_diag_clear(&d);
         }
 }
 END_TEST
@@ -324,8 +324,8 @@ START_TEST(u32_values) {
         static const char *const fields[] = { "vendor", "product", "revision", "serial" };
         for (size_t f = 0; f < 4; f++) {
                 char device[256];
-                lssd_diag d = LSSD_DIAG_INIT;
-                lssd_config *c = NULL;
+                lssconf_diag d = LSSCONF_DIAG_INIT;
+                lssconf *c = NULL;
                 const char *field = fields[f];
                 /* the field under test comes last so the others keep their defaults */
                 snprintf(device, sizeof(device), "%s%s%s%s node_id = 1; %s = %s;",
@@ -342,23 +342,23 @@ START_TEST(u32_values) {
                         ck_assert(c->buses[0].devices[0].has_revision);
                 } else {
                         ck_assert_int_eq(r, -EINVAL);
-                        expect_message(&d, LSSD_DIAG_ERROR, ":5:", u32_cases[_i].shown);
+                        expect_message(&d, LSSCONF_DIAG_ERROR, ":5:", u32_cases[_i].shown);
                         if (!strstr(u32_cases[_i].shown, "64 bits")) {
                                 char path[64];
                                 snprintf(path, sizeof(path), "buses[0].devices[0].%s: ", field);
-                                expect_message(&d, LSSD_DIAG_ERROR, path);
+                                expect_message(&d, LSSCONF_DIAG_ERROR, path);
                         }
                 }
-                lssd_config_free(c);
-                lssd_diag_clear(&d);
+                lssconf_free(c);
+                lssconf_diag_clear(&d);
         }
 }
 END_TEST
 
 /* The rewrite touches only real integer literals. */
 START_TEST(literals_in_strings_names_comments) {
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         const char *text =
                 "# 99999999999999999999 in a comment\n"
                 "// 0x1FFFFFFFFFFFFFFFFF too\n"
@@ -375,12 +375,12 @@ START_TEST(literals_in_strings_names_comments) {
         ck_assert_int_eq(r, 0);
         ck_assert_str_eq(c->buses[0].interface, "4294967296");
         ck_assert_uint_eq(c->buses[0].bitrate, 125000);
-        expect_message(&d, LSSD_DIAG_WARNING, ":5: k4294967296: unknown key");
-        expect_message(&d, LSSD_DIAG_WARNING, ":8: s: unknown key");
+        expect_message(&d, LSSCONF_DIAG_WARNING, ":5: k4294967296: unknown key");
+        expect_message(&d, LSSCONF_DIAG_WARNING, ":8: s: unknown key");
         ck_assert_uint_eq(d.n_warnings, 4);
         ck_assert_uint_eq(d.n_errors, 0);
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
@@ -402,12 +402,12 @@ START_TEST(node_id_range) {
         expect_load_error("buses = ({ interface = \"can0\"; devices = ({ vendor = 1; product = 2; serial = 3; node_id = 0x100000005; }); });",
                           "node_id: 0x100000005 is out of range 1..127");
 
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         ck_assert_int_eq(load_device("vendor = 1; product = 2; serial = 3; node_id = 0x7F;", &c, &d), 0);
         ck_assert_uint_eq(c->buses[0].devices[0].node_id, 127);
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
@@ -453,13 +453,13 @@ static const struct {
 };
 
 START_TEST(bus_key_error) {
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         ck_assert_int_eq(load_bus_key(bus_key_errors[_i].key_value, &c, &d), -EINVAL);
         char want[320];
         snprintf(want, sizeof(want), ":4: %s", bus_key_errors[_i].message);
-        expect_message(&d, LSSD_DIAG_ERROR, want);
-        lssd_diag_clear(&d);
+        expect_message(&d, LSSCONF_DIAG_ERROR, want);
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
@@ -483,11 +483,11 @@ static const struct {
 };
 
 START_TEST(interface_names) {
-        ck_assert(lssd_ifname_valid(ifnames[_i].name) == ifnames[_i].ok);
+        ck_assert(lssconf_ifname_valid(ifnames[_i].name) == ifnames[_i].ok);
 
         /* through the loader, with a printable quote in the message */
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         char text[256];
         snprintf(text, sizeof(text), "buses = (\n  {\n    interface = \"%s\";\n  }\n);\n", ifnames[_i].name);
         int r = load(text, &c, &d);
@@ -496,13 +496,13 @@ START_TEST(interface_names) {
                 ck_assert_str_eq(c->buses[0].interface, ifnames[_i].name);
         } else {
                 ck_assert_int_eq(r, -EINVAL);
-                expect_message(&d, LSSD_DIAG_ERROR, ":3: buses[0].interface: \"",
+                expect_message(&d, LSSCONF_DIAG_ERROR, ":3: buses[0].interface: \"",
                                "is not a valid interface name");
                 for (const char *p = d.messages[0].text; *p; p++)
                         ck_assert_msg(*p >= ' ' && *p < 0x7F, "unprintable byte in message");
         }
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
@@ -536,40 +536,40 @@ START_TEST(boot_ready_limit) {
                 { "buses = ( );\nboot_ready_limit_s = 120;\n", 120 },
         };
         for (size_t i = 0; i < sizeof(good) / sizeof(good[0]); i++) {
-                lssd_diag d = LSSD_DIAG_INIT;
-                lssd_config *c = NULL;
+                lssconf_diag d = LSSCONF_DIAG_INIT;
+                lssconf *c = NULL;
                 ck_assert_int_eq(load(good[i].text, &c, &d), 0);
                 ck_assert_uint_eq(d.n_errors, 0);
                 ck_assert_uint_eq(c->boot_ready_limit_s, good[i].want);
-                lssd_config_free(c);
-                lssd_diag_clear(&d);
+                lssconf_free(c);
+                lssconf_diag_clear(&d);
         }
 
         /* the whole message, file name and line first */
         const char *text = "lss_timeout_ms = 20;\n# the limit\nboot_ready_limit_s = 86401;\nbuses = ( );\n";
         char *path = write_temp(text, strlen(text)), *want;
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
-        ck_assert_int_eq(lssd_config_load_file(path, &c, &d), -EINVAL);
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
+        ck_assert_int_eq(lssconf_load_file(path, &c, &d), -EINVAL);
         ck_assert_ptr_null(c);
         ck_assert_int_ge(asprintf(&want, "%s:3: boot_ready_limit_s: 86401 is out of range 1..86400", path), 0);
-        expect_message(&d, LSSD_DIAG_ERROR, want);
+        expect_message(&d, LSSCONF_DIAG_ERROR, want);
         ck_assert_uint_eq(d.n_errors, 1);
         free(want);
-        lssd_diag_clear(&d);
+        lssconf_diag_clear(&d);
         ck_assert_int_eq(unlink(path), 0);
         free(path);
 
         ck_assert_int_eq(load_bus_key("boot_ready_limit_s = 5;", &c, &d), 0);
-        expect_message(&d, LSSD_DIAG_WARNING, ":4: buses[0].boot_ready_limit_s: unknown key, ignored");
+        expect_message(&d, LSSCONF_DIAG_WARNING, ":4: buses[0].boot_ready_limit_s: unknown key, ignored");
         ck_assert_uint_eq(c->boot_ready_limit_s, 1800);
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 
         /* the built-in configuration (--bus only) has the default too */
-        ck_assert_int_eq(lssd_config_new(&c), 0);
-        ck_assert_uint_eq(c->boot_ready_limit_s, LSSD_BOOT_READY_LIMIT_S_DEFAULT);
-        lssd_config_free(c);
+        ck_assert_int_eq(lssconf_new(&c), 0);
+        ck_assert_uint_eq(c->boot_ready_limit_s, LSSCONF_BOOT_READY_LIMIT_S_DEFAULT);
+        lssconf_free(c);
 }
 END_TEST
 
@@ -579,17 +579,17 @@ START_TEST(long_string_is_quoted_bounded) {
         memset(name, 'x', 1000);
         name[1000] = '\0';
         snprintf(text, sizeof(text), "lss_timing = \"%s\";\n", name);
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         ck_assert_int_eq(load(text, &c, &d), -EINVAL);
-        expect_message(&d, LSSD_DIAG_ERROR, "xxx...\" is not \"adaptive\" or \"fixed\"");
+        expect_message(&d, LSSCONF_DIAG_ERROR, "xxx...\" is not \"adaptive\" or \"fixed\"");
         ck_assert_uint_lt(strlen(d.messages[0].text), 200 + strlen("lssd-test-config-XXXXXX") + 64);
-        lssd_diag_clear(&d);
+        lssconf_diag_clear(&d);
 
         /* escapes in the quote */
         ck_assert_int_eq(load("lss_timing = \"a\\\"b\\\\c\\n\";\n", &c, &d), -EINVAL);
-        expect_message(&d, LSSD_DIAG_ERROR, "\"a\\\"b\\\\c\\x0a\" is not");
-        lssd_diag_clear(&d);
+        expect_message(&d, LSSCONF_DIAG_ERROR, "\"a\\\"b\\\\c\\x0a\" is not");
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
@@ -622,16 +622,16 @@ START_TEST(missing_keys) {
                           ":2: buses[0].devices[0]: missing required key 'product'");
 
         /* a bad bus default is reported once, not again for every entry */
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         ck_assert_int_eq(load("buses = ( { interface = \"can0\"; vendor = \"x\"; product = -1; devices = (\n"
                               "  { serial = 5; node_id = 1; },\n"
                               "  { serial = 6; node_id = 2; }\n"
                               "); } );\n", &c, &d), -EINVAL);
         ck_assert_uint_eq(d.n_errors, 2);
-        expect_message(&d, LSSD_DIAG_ERROR, ":1: buses[0].vendor: expected an integer");
-        expect_message(&d, LSSD_DIAG_ERROR, ":1: buses[0].product: -1 is out of range");
-        lssd_diag_clear(&d);
+        expect_message(&d, LSSCONF_DIAG_ERROR, ":1: buses[0].vendor: expected an integer");
+        expect_message(&d, LSSCONF_DIAG_ERROR, ":1: buses[0].product: -1 is out of range");
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
@@ -639,22 +639,22 @@ END_TEST
 
 START_TEST(semantic_errors_fixture) {
         char *path = test_data_path("config/semantic-errors.conf");
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
-        ck_assert_int_eq(lssd_config_load_file(path, &c, &d), -EINVAL);
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
+        ck_assert_int_eq(lssconf_load_file(path, &c, &d), -EINVAL);
         ck_assert_ptr_null(c);
-        expect_message(&d, LSSD_DIAG_ERROR, "semantic-errors.conf:11: buses[0].devices[1].node_id: 5 is already mapped to devices[0] at line 10");
-        expect_message(&d, LSSD_DIAG_ERROR, "semantic-errors.conf:12: buses[0].devices[2]: same device as devices[0] at line 10",
+        expect_message(&d, LSSCONF_DIAG_ERROR, "semantic-errors.conf:11: buses[0].devices[1].node_id: 5 is already mapped to devices[0] at line 10");
+        expect_message(&d, LSSCONF_DIAG_ERROR, "semantic-errors.conf:12: buses[0].devices[2]: same device as devices[0] at line 10",
                        "serial 0x00000001, revision 0x00000007");
-        expect_message(&d, LSSD_DIAG_ERROR, "semantic-errors.conf:6: buses[0].pool: 10..20 contains node-ID 15 mapped to devices[3] at line 13");
-        expect_message(&d, LSSD_DIAG_ERROR, "semantic-errors.conf:16: buses[0].devices[6]: same device as devices[4] at line 14");
-        expect_message(&d, LSSD_DIAG_ERROR, "semantic-errors.conf:17: buses[0].devices[7].node_id: 200 is out of range 1..127");
-        expect_message(&d, LSSD_DIAG_ERROR, "semantic-errors.conf:21: buses[1].interface: \"can0\" is already configured by buses[0] at line 3");
+        expect_message(&d, LSSCONF_DIAG_ERROR, "semantic-errors.conf:6: buses[0].pool: 10..20 contains node-ID 15 mapped to devices[3] at line 13");
+        expect_message(&d, LSSCONF_DIAG_ERROR, "semantic-errors.conf:16: buses[0].devices[6]: same device as devices[4] at line 14");
+        expect_message(&d, LSSCONF_DIAG_ERROR, "semantic-errors.conf:17: buses[0].devices[7].node_id: 200 is out of range 1..127");
+        expect_message(&d, LSSCONF_DIAG_ERROR, "semantic-errors.conf:21: buses[1].interface: \"can0\" is already configured by buses[0] at line 3");
         if (d.n_errors != 6)
                 dump(&d);
         ck_assert_uint_eq(d.n_errors, 6); /* devices[5] (revision 2) clashes with nothing */
         ck_assert_uint_eq(d.n_warnings, 0);
-        lssd_diag_clear(&d);
+        lssconf_diag_clear(&d);
         free(path);
 }
 END_TEST
@@ -694,35 +694,35 @@ START_TEST(identity_rules) {
         };
         for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
                 char *text;
-                lssd_diag d = LSSD_DIAG_INIT;
-                lssd_config *c = NULL;
+                lssconf_diag d = LSSCONF_DIAG_INIT;
+                lssconf *c = NULL;
                 ck_assert_int_ge(asprintf(&text, "%s%s%s", head, cases[i].entries, tail), 0);
                 int r = load(text, &c, &d);
                 free(text);
                 if (cases[i].message) {
                         ck_assert_int_eq(r, -EINVAL);
-                        expect_message(&d, LSSD_DIAG_ERROR, cases[i].message);
+                        expect_message(&d, LSSCONF_DIAG_ERROR, cases[i].message);
                         ck_assert_uint_eq(d.n_errors, cases[i].n_errors);
                 } else {
                         if (r < 0)
                                 dump(&d);
                         ck_assert_int_eq(r, 0);
                 }
-                lssd_config_free(c);
-                lssd_diag_clear(&d);
+                lssconf_free(c);
+                lssconf_diag_clear(&d);
         }
 }
 END_TEST
 
 START_TEST(pool_rules) {
         /* the pool may touch but not contain mapped node-IDs */
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         ck_assert_int_eq(load_bus_key("unknown = \"pool\"; pool = [ 10, 20 ]; vendor = 1; product = 1;\n"
                                       "devices = ( { serial = 1; node_id = 9; }, { serial = 2; node_id = 21; } );",
                                       &c, &d), 0);
         ck_assert_uint_eq(d.n_messages, 0);
-        lssd_config_free(c);
+        lssconf_free(c);
 
         expect_load_error("buses = ( { interface = \"can0\"; unknown = \"pool\";\n"
                           "pool = [ 10, 20 ]; vendor = 1; product = 1;\n"
@@ -736,11 +736,11 @@ START_TEST(pool_rules) {
         /* a pool that is not used is only a warning, and not checked for overlap */
         ck_assert_int_eq(load_bus_key("pool = [ 1, 127 ]; vendor = 1; product = 1;\n"
                                       "devices = ( { serial = 1; node_id = 9; } );", &c, &d), 0);
-        expect_message(&d, LSSD_DIAG_WARNING, ":4: buses[0].pool: ignored unless unknown = \"pool\"");
+        expect_message(&d, LSSCONF_DIAG_WARNING, ":4: buses[0].pool: ignored unless unknown = \"pool\"");
         ck_assert_uint_eq(d.n_errors, 0);
-        ck_assert_int_eq(c->buses[0].unknown, LSSD_UNKNOWN_IGNORE);
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        ck_assert_int_eq(c->buses[0].unknown, LSSCONF_UNKNOWN_IGNORE);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
@@ -769,8 +769,8 @@ END_TEST
 /* ---- warnings ---- */
 
 START_TEST(unknown_keys_warn) {
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         int r = load("lss_timeout = 20;\n"
                      "buses = (\n"
                      "  {\n"
@@ -783,45 +783,45 @@ START_TEST(unknown_keys_warn) {
         ck_assert_int_eq(r, 0);
         ck_assert_uint_eq(d.n_errors, 0);
         ck_assert_uint_eq(d.n_warnings, 3);
-        expect_message(&d, LSSD_DIAG_WARNING, ":1: lss_timeout: unknown key, ignored");
-        expect_message(&d, LSSD_DIAG_WARNING, ":5: buses[0].bitrat: unknown key, ignored");
-        expect_message(&d, LSSD_DIAG_WARNING, ":7: buses[0].devices[0].nodeid: unknown key, ignored");
+        expect_message(&d, LSSCONF_DIAG_WARNING, ":1: lss_timeout: unknown key, ignored");
+        expect_message(&d, LSSCONF_DIAG_WARNING, ":5: buses[0].bitrat: unknown key, ignored");
+        expect_message(&d, LSSCONF_DIAG_WARNING, ":7: buses[0].devices[0].nodeid: unknown key, ignored");
         ck_assert_uint_eq(c->buses[0].bitrate, 125000);
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
 START_TEST(empty_and_no_buses) {
         static const char *const texts[] = { "", "\n\n# only a comment\n", "lss_timeout_ms = 30;\n" };
         for (size_t i = 0; i < 3; i++) {
-                lssd_diag d = LSSD_DIAG_INIT;
-                lssd_config *c = NULL;
+                lssconf_diag d = LSSCONF_DIAG_INIT;
+                lssconf *c = NULL;
                 ck_assert_int_lt(load(texts[i], &c, &d), 0);
                 ck_assert_ptr_null(c);
                 ck_assert_uint_eq(d.n_errors, 1);
                 ck_assert_uint_eq(d.n_warnings, 0);
-                expect_message(&d, LSSD_DIAG_ERROR, ":1: no buses configured");
-                lssd_diag_clear(&d);
+                expect_message(&d, LSSCONF_DIAG_ERROR, ":1: no buses configured");
+                lssconf_diag_clear(&d);
         }
 
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         /* an empty list says "nothing yet" on purpose: a warning, lssd serves no bus */
         ck_assert_int_eq(load("\nbuses = ( );\n", &c, &d), 0);
         ck_assert_uint_eq(d.n_errors, 0);
-        expect_message(&d, LSSD_DIAG_WARNING, ":2: buses: empty list: lssd serves no bus until one is added");
+        expect_message(&d, LSSCONF_DIAG_WARNING, ":2: buses: empty list: lssd serves no bus until one is added");
         ck_assert_uint_eq(c->n_buses, 0);
-        lssd_config_free(c);
+        lssconf_free(c);
         c = NULL;
-        lssd_diag_clear(&d);
+        lssconf_diag_clear(&d);
 
         /* an empty device list is fine */
         ck_assert_int_eq(load_bus_key("devices = ( );", &c, &d), 0);
         ck_assert_uint_eq(d.n_messages, 0);
         ck_assert_uint_eq(c->buses[0].n_devices, 0);
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
@@ -839,31 +839,31 @@ START_TEST(syntax_error_line) {
 END_TEST
 
 START_TEST(nul_byte_in_buffer) {
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         static const char text[] = "a = 1;\n\n\0 b = 2;\n";
         ck_assert_int_eq(load_len(text, sizeof(text) - 1, &c, &d), -EINVAL);
-        expect_message(&d, LSSD_DIAG_ERROR, ":3: NUL byte");
-        lssd_diag_clear(&d);
+        expect_message(&d, LSSCONF_DIAG_ERROR, ":3: NUL byte");
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
 START_TEST(nonexistent_file) {
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = (lssd_config *) 1;
-        ck_assert_int_eq(lssd_config_load_file("/nonexistent/lssd.conf", &c, &d), -ENOENT);
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = (lssconf *) 1;
+        ck_assert_int_eq(lssconf_load_file("/nonexistent/lssd.conf", &c, &d), -ENOENT);
         ck_assert_ptr_null(c);
-        expect_message(&d, LSSD_DIAG_ERROR, "/nonexistent/lssd.conf: cannot open: No such file or directory");
-        lssd_diag_clear(&d);
+        expect_message(&d, LSSCONF_DIAG_ERROR, "/nonexistent/lssd.conf: cannot open: No such file or directory");
+        lssconf_diag_clear(&d);
 
         /* a directory opens but cannot be read */
         const char *tmp = getenv("TMPDIR");
-        ck_assert_int_eq(lssd_config_load_file(tmp && *tmp ? tmp : "/tmp", &c, &d), -EISDIR);
-        expect_message(&d, LSSD_DIAG_ERROR, "cannot read: Is a directory");
-        lssd_diag_clear(&d);
+        ck_assert_int_eq(lssconf_load_file(tmp && *tmp ? tmp : "/tmp", &c, &d), -EISDIR);
+        expect_message(&d, LSSCONF_DIAG_ERROR, "cannot read: Is a directory");
+        lssconf_diag_clear(&d);
 
         /* no diag: the error is still returned */
-        ck_assert_int_eq(lssd_config_load_file("/nonexistent/lssd.conf", &c, NULL), -ENOENT);
+        ck_assert_int_eq(lssconf_load_file("/nonexistent/lssd.conf", &c, NULL), -ENOENT);
 }
 END_TEST
 
@@ -896,8 +896,8 @@ START_TEST(one_megabyte_of_junk) {
                 }
         }
 
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         double t0 = now_s();
         ck_assert_int_eq(load_len(junk, size, &c, &d), -EINVAL);
         ck_assert_double_lt(now_s() - t0, 20.0);
@@ -906,21 +906,21 @@ START_TEST(one_megabyte_of_junk) {
         for (size_t i = 0; i < d.n_messages; i++)
                 ck_assert_msg(strstr(d.messages[i].text, "lssd-test-config-") && strchr(d.messages[i].text, ':'),
                               "message without location: %s", d.messages[i].text);
-        lssd_diag_clear(&d);
+        lssconf_diag_clear(&d);
         free(junk);
 }
 END_TEST
 
 START_TEST(too_big) {
-        size_t size = LSSD_CONFIG_SIZE_MAX + 1;
+        size_t size = LSSCONF_SIZE_MAX + 1;
         char *text = malloc(size);
         ck_assert_ptr_nonnull(text);
         memset(text, '\n', size);
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         ck_assert_int_eq(load_len(text, size, &c, &d), -EFBIG);
-        expect_message(&d, LSSD_DIAG_ERROR, "refusing to read it");
-        lssd_diag_clear(&d);
+        expect_message(&d, LSSCONF_DIAG_ERROR, "refusing to read it");
+        lssconf_diag_clear(&d);
         free(text);
 }
 END_TEST
@@ -932,15 +932,15 @@ START_TEST(many_messages_are_capped) {
         for (size_t i = 0; i < n; i++)
                 p += sprintf(p, "k%zu = %zu;\n", i, i);
         sprintf(p, "buses = ( { interface = \"can0\"; } );\n");
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         ck_assert_int_eq(load(text, &c, &d), 0);
         ck_assert_uint_eq(d.n_warnings, n);
-        ck_assert_uint_eq(d.n_messages, LSSD_DIAG_MAX);
-        ck_assert_uint_eq(d.n_dropped, n - LSSD_DIAG_MAX);
-        expect_message(&d, LSSD_DIAG_WARNING, ":1: k0: unknown key");
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        ck_assert_uint_eq(d.n_messages, LSSCONF_DIAG_MAX);
+        ck_assert_uint_eq(d.n_dropped, n - LSSCONF_DIAG_MAX);
+        expect_message(&d, LSSCONF_DIAG_WARNING, ":1: k0: unknown key");
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
         free(text);
 }
 END_TEST
@@ -954,14 +954,14 @@ START_TEST(many_devices) {
         for (size_t i = 0; i < n; i++)
                 p += sprintf(p, "{ serial = 7; node_id = %zu; },\n", i % 127 + 1);
         p += sprintf(p, "{ serial = 8; node_id = 1; }\n); } );\n");
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         double t0 = now_s();
         ck_assert_int_eq(load(text, &c, &d), -EINVAL);
         ck_assert_double_lt(now_s() - t0, 20.0);
         ck_assert_uint_eq(d.n_errors, (n - 1) + (n - 127) + 1); /* identity, node-ID */
-        ck_assert_uint_eq(d.n_messages, LSSD_DIAG_MAX);
-        lssd_diag_clear(&d);
+        ck_assert_uint_eq(d.n_messages, LSSCONF_DIAG_MAX);
+        lssconf_diag_clear(&d);
         free(text);
 }
 END_TEST
@@ -969,139 +969,139 @@ END_TEST
 /* ---- API ---- */
 
 START_TEST(lookups) {
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
         ck_assert_int_eq(load("buses = ( { interface = \"can0\"; vendor = 1; product = 2; devices = (\n"
                               "  { serial = 10; node_id = 5; },\n"
                               "  { serial = 11; node_id = 6; revision = 3; }\n"
                               "); }, { interface = \"can1\"; } );\n", &c, &d), 0);
-        const lssd_bus_config *b = lssd_config_find_bus(c, "can0");
+        const lssconf_bus *b = lssconf_find_bus(c, "can0");
         ck_assert_ptr_nonnull(b);
-        ck_assert_ptr_null(lssd_config_find_bus(c, "can2"));
-        ck_assert_ptr_null(lssd_config_find_bus(c, NULL));
-        ck_assert_ptr_null(lssd_config_find_bus(NULL, "can0"));
+        ck_assert_ptr_null(lssconf_find_bus(c, "can2"));
+        ck_assert_ptr_null(lssconf_find_bus(c, NULL));
+        ck_assert_ptr_null(lssconf_find_bus(NULL, "can0"));
 
         lss_identity id = { .vendor = 1, .product = 2, .revision = 99, .serial = 10 };
-        ck_assert_ptr_eq(lssd_config_lookup_device(b, &id), &b->devices[0]); /* any revision */
+        ck_assert_ptr_eq(lssconf_lookup_device(b, &id), &b->devices[0]); /* any revision */
         id.serial = 11;
-        ck_assert_ptr_null(lssd_config_lookup_device(b, &id)); /* revision 3 only */
+        ck_assert_ptr_null(lssconf_lookup_device(b, &id)); /* revision 3 only */
         id.revision = 3;
-        ck_assert_ptr_eq(lssd_config_lookup_device(b, &id), &b->devices[1]);
+        ck_assert_ptr_eq(lssconf_lookup_device(b, &id), &b->devices[1]);
         id.vendor = 9;
-        ck_assert_ptr_null(lssd_config_lookup_device(b, &id));
+        ck_assert_ptr_null(lssconf_lookup_device(b, &id));
         id = (lss_identity) { .vendor = 1, .product = 3, .revision = 3, .serial = 11 };
-        ck_assert_ptr_null(lssd_config_lookup_device(b, &id));
-        ck_assert_ptr_null(lssd_config_lookup_device(NULL, &id));
-        ck_assert_ptr_null(lssd_config_lookup_device(b, NULL));
+        ck_assert_ptr_null(lssconf_lookup_device(b, &id));
+        ck_assert_ptr_null(lssconf_lookup_device(NULL, &id));
+        ck_assert_ptr_null(lssconf_lookup_device(b, NULL));
 
-        ck_assert_ptr_eq(lssd_bus_config_find_node_id(b, 6), &b->devices[1]);
-        ck_assert_ptr_null(lssd_bus_config_find_node_id(b, 7));
-        ck_assert_ptr_null(lssd_bus_config_find_node_id(NULL, 6));
+        ck_assert_ptr_eq(lssconf_bus_find_node_id(b, 6), &b->devices[1]);
+        ck_assert_ptr_null(lssconf_bus_find_node_id(b, 7));
+        ck_assert_ptr_null(lssconf_bus_find_node_id(NULL, 6));
         ck_assert_uint_eq(b->devices[1].line, 3);
 
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
-        ck_assert_ptr_null(lssd_config_free(NULL));
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
+        ck_assert_ptr_null(lssconf_free(NULL));
 }
 END_TEST
 
 START_TEST(describe) {
-        lssd_diag d = LSSD_DIAG_INIT;
-        lssd_config *c = NULL;
-        char buf[LSSD_BUS_DESCRIBE_MAX];
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
+        char buf[LSSCONF_BUS_DESCRIBE_MAX];
         ck_assert_int_eq(load("lss_timing = \"fixed\";\n"
                               "buses = ( { interface = \"can0\"; bitrate = 250000; auto_assign = true; unknown = \"pool\";\n"
                               "pool = [ 100, 110 ]; nmt_stop = true; replace = true; bitrate_change = true; lss_timeout_ms = 30;\n"
                               "vendor = 1; product = 2; devices = ( { serial = 10; node_id = 5; } ); },\n"
                               "{ interface = \"can1\"; store = false; devices = ( { vendor = 1; product = 2; serial = 10; node_id = 5; },\n"
                               "{ vendor = 1; product = 2; serial = 11; node_id = 6; } ); } );\n", &c, &d), 0);
-        ck_assert_str_eq(lssd_bus_config_describe(&c->buses[0], buf, sizeof(buf)),
+        ck_assert_str_eq(lssconf_bus_describe(&c->buses[0], buf, sizeof(buf)),
                          "can0: 250000 bit/s, 1 mapped device, auto-assign on, store on, unknown devices: pool 100..110, "
                          "nmt-stop on, replace on, bit-rate change allowed, LSS timeout 30 ms (fixed)");
-        ck_assert_str_eq(lssd_bus_config_describe(&c->buses[1], buf, sizeof(buf)),
+        ck_assert_str_eq(lssconf_bus_describe(&c->buses[1], buf, sizeof(buf)),
                          "can1: 125000 bit/s, 2 mapped devices, auto-assign off, store off, unknown devices: ignore, "
                          "nmt-stop off, replace off, bit-rate change off, LSS timeout 20 ms (fixed)");
         /* truncation is safe */
         char small[8];
-        ck_assert_str_eq(lssd_bus_config_describe(&c->buses[0], small, sizeof(small)), "can0: 2");
-        ck_assert_ptr_null(lssd_bus_config_describe(&c->buses[0], NULL, 0));
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        ck_assert_str_eq(lssconf_bus_describe(&c->buses[0], small, sizeof(small)), "can0: 2");
+        ck_assert_ptr_null(lssconf_bus_describe(&c->buses[0], NULL, 0));
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 }
 END_TEST
 
 START_TEST(built_in_config) {
-        lssd_config *c = NULL;
-        lssd_bus_config *b = NULL;
-        ck_assert_int_eq(lssd_config_new(&c), 0);
+        lssconf *c = NULL;
+        lssconf_bus *b = NULL;
+        ck_assert_int_eq(lssconf_new(&c), 0);
         ck_assert_ptr_null(c->source);
         ck_assert_uint_eq(c->n_buses, 0);
-        ck_assert_int_eq(lssd_config_add_default_bus(c, "vcan0", &b), 0);
+        ck_assert_int_eq(lssconf_add_default_bus(c, "vcan0", &b), 0);
         ck_assert_ptr_eq(b, &c->buses[0]);
-        ck_assert_int_eq(lssd_config_add_default_bus(c, "vcan1", NULL), 0);
-        ck_assert_int_eq(lssd_config_add_default_bus(c, "vcan0", NULL), -EEXIST);
-        ck_assert_int_eq(lssd_config_add_default_bus(c, "bad/name", NULL), -EINVAL);
-        ck_assert_int_eq(lssd_config_add_default_bus(c, NULL, NULL), -EINVAL);
+        ck_assert_int_eq(lssconf_add_default_bus(c, "vcan1", NULL), 0);
+        ck_assert_int_eq(lssconf_add_default_bus(c, "vcan0", NULL), -EEXIST);
+        ck_assert_int_eq(lssconf_add_default_bus(c, "bad/name", NULL), -EINVAL);
+        ck_assert_int_eq(lssconf_add_default_bus(c, NULL, NULL), -EINVAL);
         ck_assert_uint_eq(c->n_buses, 2);
         b = &c->buses[0];
         ck_assert_str_eq(b->interface, "vcan0");
-        ck_assert_uint_eq(b->bitrate, LSSD_BITRATE_DEFAULT);
+        ck_assert_uint_eq(b->bitrate, LSSCONF_BITRATE_DEFAULT);
         ck_assert(!b->auto_assign);
         ck_assert(b->store);
-        ck_assert_int_eq(b->unknown, LSSD_UNKNOWN_IGNORE);
-        ck_assert_uint_eq(b->lss_timeout_ms, LSSD_LSS_TIMEOUT_MS_DEFAULT);
+        ck_assert_int_eq(b->unknown, LSSCONF_UNKNOWN_IGNORE);
+        ck_assert_uint_eq(b->lss_timeout_ms, LSSCONF_LSS_TIMEOUT_MS_DEFAULT);
         ck_assert_uint_eq(b->n_devices, 0);
-        ck_assert_ptr_eq(lssd_config_find_bus(c, "vcan1"), &c->buses[1]);
-        lssd_config_free(c);
+        ck_assert_ptr_eq(lssconf_find_bus(c, "vcan1"), &c->buses[1]);
+        lssconf_free(c);
 }
 END_TEST
 
 START_TEST(enum_strings) {
-        ck_assert_str_eq(lssd_unknown_policy_to_string(LSSD_UNKNOWN_IGNORE), "ignore");
-        ck_assert_str_eq(lssd_unknown_policy_to_string(LSSD_UNKNOWN_POOL), "pool");
-        ck_assert_ptr_null(lssd_unknown_policy_to_string((lssd_unknown_policy) 7));
-        ck_assert_int_eq(lssd_unknown_policy_from_string("pool"), LSSD_UNKNOWN_POOL);
-        ck_assert_int_eq(lssd_unknown_policy_from_string("Pool"), -EINVAL);
-        ck_assert_int_eq(lssd_unknown_policy_from_string(NULL), -EINVAL);
-        ck_assert_str_eq(lssd_lss_timing_to_string(LSSD_LSS_TIMING_FIXED), "fixed");
-        ck_assert_ptr_null(lssd_lss_timing_to_string((lssd_lss_timing) 2));
-        ck_assert_int_eq(lssd_lss_timing_from_string("adaptive"), LSSD_LSS_TIMING_ADAPTIVE);
-        ck_assert_int_eq(lssd_lss_timing_from_string(""), -EINVAL);
-        ck_assert_str_eq(lssd_diag_severity_to_string(LSSD_DIAG_ERROR), "error");
-        ck_assert_str_eq(lssd_diag_severity_to_string(LSSD_DIAG_WARNING), "warning");
+        ck_assert_str_eq(lssconf_unknown_policy_to_string(LSSCONF_UNKNOWN_IGNORE), "ignore");
+        ck_assert_str_eq(lssconf_unknown_policy_to_string(LSSCONF_UNKNOWN_POOL), "pool");
+        ck_assert_ptr_null(lssconf_unknown_policy_to_string((lssconf_unknown_policy) 7));
+        ck_assert_int_eq(lssconf_unknown_policy_from_string("pool"), LSSCONF_UNKNOWN_POOL);
+        ck_assert_int_eq(lssconf_unknown_policy_from_string("Pool"), -EINVAL);
+        ck_assert_int_eq(lssconf_unknown_policy_from_string(NULL), -EINVAL);
+        ck_assert_str_eq(lssconf_lss_timing_to_string(LSSCONF_LSS_TIMING_FIXED), "fixed");
+        ck_assert_ptr_null(lssconf_lss_timing_to_string((lssconf_lss_timing) 2));
+        ck_assert_int_eq(lssconf_lss_timing_from_string("adaptive"), LSSCONF_LSS_TIMING_ADAPTIVE);
+        ck_assert_int_eq(lssconf_lss_timing_from_string(""), -EINVAL);
+        ck_assert_str_eq(lssconf_diag_severity_to_string(LSSCONF_DIAG_ERROR), "error");
+        ck_assert_str_eq(lssconf_diag_severity_to_string(LSSCONF_DIAG_WARNING), "warning");
 }
 END_TEST
 
 START_TEST(load_buffer_api) {
         static const char text[] = "buses = ( { interface = \"can0\"; } );\nbuses2 = 1;\n";
-        lssd_config *c = NULL;
-        lssd_diag d = LSSD_DIAG_INIT;
+        lssconf *c = NULL;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
 
         /* not NUL-terminated: only len bytes count */
-        ck_assert_int_eq(lssd_config_load_buffer(text, strlen("buses = ( { interface = \"can0\"; } );\n"),
+        ck_assert_int_eq(lssconf_load_buffer(text, strlen("buses = ( { interface = \"can0\"; } );\n"),
                                                  "mem.conf", &c, &d), 0);
         ck_assert_uint_eq(d.n_messages, 0);
         ck_assert_str_eq(c->source, "mem.conf");
-        lssd_config_free(c);
+        lssconf_free(c);
 
-        ck_assert_int_eq(lssd_config_load_buffer(text, strlen(text), NULL, &c, &d), 0);
-        expect_message(&d, LSSD_DIAG_WARNING, "(config):2: buses2: unknown key");
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        ck_assert_int_eq(lssconf_load_buffer(text, strlen(text), NULL, &c, &d), 0);
+        expect_message(&d, LSSCONF_DIAG_WARNING, "(config):2: buses2: unknown key");
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
 
         /* diag is optional */
-        ck_assert_int_eq(lssd_config_load_buffer("x = ;", 5, "m", &c, NULL), -EINVAL);
+        ck_assert_int_eq(lssconf_load_buffer("x = ;", 5, "m", &c, NULL), -EINVAL);
         ck_assert_ptr_null(c);
-        ck_assert_int_eq(lssd_config_load_buffer(text, strlen(text), "m", &c, NULL), 0);
-        lssd_config_free(c);
+        ck_assert_int_eq(lssconf_load_buffer(text, strlen(text), "m", &c, NULL), 0);
+        lssconf_free(c);
 
         /* messages append to what is there */
-        lssd_diag_add(&d, LSSD_DIAG_ERROR, "earlier %d", 1);
-        ck_assert_int_eq(lssd_config_load_buffer(text, strlen(text), "m", &c, &d), 0);
+        lssconf_diag_add(&d, LSSCONF_DIAG_ERROR, "earlier %d", 1);
+        ck_assert_int_eq(lssconf_load_buffer(text, strlen(text), "m", &c, &d), 0);
         ck_assert_uint_eq(d.n_messages, 2);
         ck_assert_str_eq(d.messages[0].text, "earlier 1");
-        lssd_config_free(c);
-        lssd_diag_clear(&d);
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
         ck_assert_uint_eq(d.n_messages, 0);
         ck_assert_uint_eq(d.n_errors, 0);
 }

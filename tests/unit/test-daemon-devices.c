@@ -63,9 +63,9 @@ static const lss_identity A = { 0x100, 0x1, 0x1, 0xA };
 static const lss_identity B = { 0x100, 0x1, 0x1, 0xB };
 
 /* A map with A at node-ID 5. */
-static lssd_device_config map_a5 = { .identity = { 0x100, 0x1, 0x1, 0xA }, .has_revision = true, .node_id = 5 };
+static lssconf_device map_a5 = { .identity = { 0x100, 0x1, 0x1, 0xA }, .has_revision = true, .node_id = 5 };
 
-static void setup(lssd_devices *ds, recorder *r, lssd_bus_config *c) {
+static void setup(lssd_devices *ds, recorder *r, lssconf_bus *c) {
         memset(r, 0, sizeof(*r));
         memset(c, 0, sizeof(*c));
         snprintf(c->interface, sizeof(c->interface), "can0");
@@ -77,7 +77,7 @@ static void setup(lssd_devices *ds, recorder *r, lssd_bus_config *c) {
 
 START_TEST(add_find_known) {
         lssd_devices ds;
-        lssd_bus_config c;
+        lssconf_bus c;
         recorder r;
         lssd_device *d = NULL, *again = NULL;
         setup(&ds, &r, &c);
@@ -114,7 +114,7 @@ END_TEST
 
 START_TEST(update_publishes_changes) {
         lssd_devices ds;
-        lssd_bus_config c;
+        lssconf_bus c;
         recorder r;
         lssd_device *a = NULL, *b = NULL;
         setup(&ds, &r, &c);
@@ -149,9 +149,9 @@ START_TEST(update_publishes_changes) {
         ck_assert_ptr_null(lssd_devices_with_node_id(&ds, 5, &A));
 
         /* a new map: A is mapped to 7 now */
-        lssd_device_config a7 = map_a5;
+        lssconf_device a7 = map_a5;
         a7.node_id = 7;
-        lssd_bus_config c7 = c;
+        lssconf_bus c7 = c;
         c7.devices = &a7;
         r.log[0] = 0;
         lssd_devices_set_config(&ds, &c7);
@@ -165,7 +165,7 @@ END_TEST
 
 START_TEST(remove_and_refuse) {
         lssd_devices ds;
-        lssd_bus_config c;
+        lssconf_bus c;
         recorder r;
         lssd_device *d = NULL;
         setup(&ds, &r, &c);

@@ -7,47 +7,47 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "config/lssd_config.h"
+#include "config/lssconf.h"
 
-_Static_assert(LSSD_IFNAME_MAX + 1 == IFNAMSIZ, "interface name size must match the kernel's");
+_Static_assert(LSSCONF_IFNAME_MAX + 1 == IFNAMSIZ, "interface name size must match the kernel's");
 
-int lssd_config_new(lssd_config **ret) {
-        lssd_config *c = calloc(1, sizeof(*c));
+int lssconf_new(lssconf **ret) {
+        lssconf *c = calloc(1, sizeof(*c));
         if (!c)
                 return -ENOMEM;
-        c->lss_timeout_ms = LSSD_LSS_TIMEOUT_MS_DEFAULT;
-        c->lss_timing = LSSD_LSS_TIMING_ADAPTIVE;
-        c->boot_ready_limit_s = LSSD_BOOT_READY_LIMIT_S_DEFAULT;
+        c->lss_timeout_ms = LSSCONF_LSS_TIMEOUT_MS_DEFAULT;
+        c->lss_timing = LSSCONF_LSS_TIMING_ADAPTIVE;
+        c->boot_ready_limit_s = LSSCONF_BOOT_READY_LIMIT_S_DEFAULT;
         *ret = c;
         return 0;
 }
 
-int lssd_config_add_default_bus(lssd_config *c, const char *ifname, lssd_bus_config **ret) {
-        if (!lssd_ifname_valid(ifname))
+int lssconf_add_default_bus(lssconf *c, const char *ifname, lssconf_bus **ret) {
+        if (!lssconf_ifname_valid(ifname))
                 return -EINVAL;
-        if (lssd_config_find_bus(c, ifname))
+        if (lssconf_find_bus(c, ifname))
                 return -EEXIST;
 
-        lssd_bus_config *buses = realloc(c->buses, (c->n_buses + 1) * sizeof(*buses));
+        lssconf_bus *buses = realloc(c->buses, (c->n_buses + 1) * sizeof(*buses));
         if (!buses)
                 return -ENOMEM;
         c->buses = buses;
 
-        lssd_bus_config *b = &c->buses[c->n_buses++];
-        *b = (lssd_bus_config) {
-                .bitrate = LSSD_BITRATE_DEFAULT,
+        lssconf_bus *b = &c->buses[c->n_buses++];
+        *b = (lssconf_bus) {
+                .bitrate = LSSCONF_BITRATE_DEFAULT,
                 .lss_timeout_ms = c->lss_timeout_ms,
                 .lss_timing = c->lss_timing,
                 .store = true,
-                .unknown = LSSD_UNKNOWN_IGNORE,
+                .unknown = LSSCONF_UNKNOWN_IGNORE,
         };
-        strcpy(b->interface, ifname); /* length checked by lssd_ifname_valid() */
+        strcpy(b->interface, ifname); /* length checked by lssconf_ifname_valid() */
         if (ret)
                 *ret = b;
         return 0;
 }
 
-lssd_config *lssd_config_free(lssd_config *c) {
+lssconf *lssconf_free(lssconf *c) {
         if (!c)
                 return NULL;
         for (size_t i = 0; i < c->n_buses; i++)
@@ -58,7 +58,7 @@ lssd_config *lssd_config_free(lssd_config *c) {
         return NULL;
 }
 
-const lssd_bus_config *lssd_config_find_bus(const lssd_config *c, const char *ifname) {
+const lssconf_bus *lssconf_find_bus(const lssconf *c, const char *ifname) {
         if (!c || !ifname)
                 return NULL;
         for (size_t i = 0; i < c->n_buses; i++)
@@ -67,20 +67,20 @@ const lssd_bus_config *lssd_config_find_bus(const lssd_config *c, const char *if
         return NULL;
 }
 
-bool lssd_device_config_matches(const lssd_device_config *d, const lss_identity *id) {
+bool lssconf_device_matches(const lssconf_device *d, const lss_identity *id) {
         return lss_identity_matches(&d->identity, d->has_revision, id);
 }
 
-const lssd_device_config *lssd_config_lookup_device(const lssd_bus_config *b, const lss_identity *id) {
+const lssconf_device *lssconf_lookup_device(const lssconf_bus *b, const lss_identity *id) {
         if (!b || !id)
                 return NULL;
         for (size_t i = 0; i < b->n_devices; i++)
-                if (lssd_device_config_matches(&b->devices[i], id))
+                if (lssconf_device_matches(&b->devices[i], id))
                         return &b->devices[i];
         return NULL;
 }
 
-const lssd_device_config *lssd_bus_config_find_node_id(const lssd_bus_config *b, uint8_t node_id) {
+const lssconf_device *lssconf_bus_find_node_id(const lssconf_bus *b, uint8_t node_id) {
         if (!b)
                 return NULL;
         for (size_t i = 0; i < b->n_devices; i++)
@@ -89,12 +89,12 @@ const lssd_device_config *lssd_bus_config_find_node_id(const lssd_bus_config *b,
         return NULL;
 }
 
-const char *lssd_bus_config_describe(const lssd_bus_config *b, char *buf, size_t size) {
+const char *lssconf_bus_describe(const lssconf_bus *b, char *buf, size_t size) {
         char unknown[32];
 
         if (!buf || size == 0)
                 return buf;
-        if (b->unknown == LSSD_UNKNOWN_POOL)
+        if (b->unknown == LSSCONF_UNKNOWN_POOL)
                 snprintf(unknown, sizeof(unknown), "pool %u..%u", b->pool_lo, b->pool_hi);
         else
                 snprintf(unknown, sizeof(unknown), "ignore");
@@ -105,15 +105,15 @@ const char *lssd_bus_config_describe(const lssd_bus_config *b, char *buf, size_t
                  b->interface, b->bitrate, b->n_devices, b->n_devices == 1 ? "" : "s",
                  b->auto_assign ? "on" : "off", b->store ? "on" : "off", unknown,
                  b->nmt_stop ? "on" : "off", b->replace ? "on" : "off", b->bitrate_change ? "allowed" : "off",
-                 b->lss_timeout_ms, lssd_lss_timing_to_string(b->lss_timing));
+                 b->lss_timeout_ms, lssconf_lss_timing_to_string(b->lss_timing));
         return buf;
 }
 
-bool lssd_ifname_valid(const char *name) {
+bool lssconf_ifname_valid(const char *name) {
         if (!name)
                 return false;
         size_t n = strlen(name);
-        if (n == 0 || n > LSSD_IFNAME_MAX)
+        if (n == 0 || n > LSSCONF_IFNAME_MAX)
                 return false;
         if (strcmp(name, ".") == 0 || strcmp(name, "..") == 0)
                 return false;
@@ -126,13 +126,13 @@ bool lssd_ifname_valid(const char *name) {
 }
 
 static const char *const unknown_policy_names[] = {
-        [LSSD_UNKNOWN_IGNORE] = "ignore",
-        [LSSD_UNKNOWN_POOL] = "pool",
+        [LSSCONF_UNKNOWN_IGNORE] = "ignore",
+        [LSSCONF_UNKNOWN_POOL] = "pool",
 };
 
 static const char *const lss_timing_names[] = {
-        [LSSD_LSS_TIMING_ADAPTIVE] = "adaptive",
-        [LSSD_LSS_TIMING_FIXED] = "fixed",
+        [LSSCONF_LSS_TIMING_ADAPTIVE] = "adaptive",
+        [LSSCONF_LSS_TIMING_FIXED] = "fixed",
 };
 
 static int name_lookup(const char *const *names, size_t n, const char *s) {
@@ -144,20 +144,20 @@ static int name_lookup(const char *const *names, size_t n, const char *s) {
         return -EINVAL;
 }
 
-const char *lssd_unknown_policy_to_string(lssd_unknown_policy p) {
+const char *lssconf_unknown_policy_to_string(lssconf_unknown_policy p) {
         return (unsigned) p < sizeof(unknown_policy_names) / sizeof(unknown_policy_names[0]) ?
                 unknown_policy_names[p] : NULL;
 }
 
-int lssd_unknown_policy_from_string(const char *s) {
+int lssconf_unknown_policy_from_string(const char *s) {
         return name_lookup(unknown_policy_names, sizeof(unknown_policy_names) / sizeof(unknown_policy_names[0]), s);
 }
 
-const char *lssd_lss_timing_to_string(lssd_lss_timing t) {
+const char *lssconf_lss_timing_to_string(lssconf_lss_timing t) {
         return (unsigned) t < sizeof(lss_timing_names) / sizeof(lss_timing_names[0]) ?
                 lss_timing_names[t] : NULL;
 }
 
-int lssd_lss_timing_from_string(const char *s) {
+int lssconf_lss_timing_from_string(const char *s) {
         return name_lookup(lss_timing_names, sizeof(lss_timing_names) / sizeof(lss_timing_names[0]), s);
 }

@@ -7,13 +7,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "config/lssd_config_prescan.h"
+#include "config/lssconf_prescan.h"
 
 typedef struct scan {
         const char *text;
         size_t len;
         const char *name;
-        lssd_diag *diag;
+        lssconf_diag *diag;
         unsigned line;
         size_t *inserts; /* offsets where an 'L' goes, ascending */
         size_t n_inserts, n_allocated;
@@ -102,7 +102,7 @@ static size_t match_hex(const char *p, size_t n, size_t *digits_end) {
 
 static void scan_error(scan *s, const char *what, const char *literal, size_t len) {
         /* Literals are digits and letters only: safe to quote, but cap the length. */
-        lssd_diag_add(s->diag, LSSD_DIAG_ERROR, "%s:%u: integer %.*s%s %s",
+        lssconf_diag_add(s->diag, LSSCONF_DIAG_ERROR, "%s:%u: integer %.*s%s %s",
                       s->name, s->line, (int) (len > 40 ? 40 : len), literal, len > 40 ? "..." : "", what);
         s->failed = true;
 }
@@ -199,7 +199,7 @@ static size_t scan_token(scan *s, size_t i) {
                 return i < s->len ? i + 1 : s->len;
         }
         if (p[0] == '@' && n >= 8 && memcmp(p, "@include", 8) == 0) {
-                lssd_diag_add(s->diag, LSSD_DIAG_ERROR, "%s:%u: @include is not supported", s->name, s->line);
+                lssconf_diag_add(s->diag, LSSCONF_DIAG_ERROR, "%s:%u: @include is not supported", s->name, s->line);
                 s->failed = true;
                 return i + 8;
         }
@@ -228,7 +228,7 @@ static size_t scan_token(scan *s, size_t i) {
         return i + 1;
 }
 
-int lssd_config_prescan(const char *text, size_t len, const char *name, lssd_diag *diag,
+int lssconf_prescan(const char *text, size_t len, const char *name, lssconf_diag *diag,
                         char **ret, unsigned *ret_open_comment_line) {
         scan s = {
                 .text = text,
@@ -243,7 +243,7 @@ int lssd_config_prescan(const char *text, size_t len, const char *name, lssd_dia
                 unsigned line = 1;
                 for (const char *q = text; q < nul; q++)
                         line += *q == '\n';
-                lssd_diag_add(diag, LSSD_DIAG_ERROR, "%s:%u: NUL byte, this is not a text file", name, line);
+                lssconf_diag_add(diag, LSSCONF_DIAG_ERROR, "%s:%u: NUL byte, this is not a text file", name, line);
                 return -EINVAL;
         }
 

@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "config/lssd_config_check.h"
+#include "config/lssconf_check.h"
 
 typedef struct identity_key {
         uint32_t vendor, product, serial, revision;
@@ -48,15 +48,15 @@ static void format_revision(const identity_key *k, char *buf, size_t size) {
 
 /* An entry without revision collides with every entry of the same
  * vendor/product/serial; entries with revisions collide when those match. */
-static int check_identities(const char *name, size_t bus_index, const lssd_bus_config *b,
-                            const lssd_bus_src *src, lssd_diag *diag) {
+static int check_identities(const char *name, size_t bus_index, const lssconf_bus *b,
+                            const lssconf_bus_src *src, lssconf_diag *diag) {
         identity_key *keys = calloc(b->n_devices ? b->n_devices : 1, sizeof(*keys));
         size_t n = 0;
         if (!keys)
                 return -ENOMEM;
 
         for (size_t i = 0; i < b->n_devices; i++) {
-                const lssd_device_config *d = &b->devices[i];
+                const lssconf_device *d = &b->devices[i];
                 if (!src->devices[i].ok)
                         continue;
                 keys[n++] = (identity_key) {
@@ -98,7 +98,7 @@ static int check_identities(const char *name, size_t bus_index, const lssd_bus_c
 
                         char rev[16];
                         format_revision(x, rev, sizeof(rev));
-                        lssd_diag_add(diag, LSSD_DIAG_ERROR,
+                        lssconf_diag_add(diag, LSSCONF_DIAG_ERROR,
                                       "%s:%u: buses[%zu].devices[%zu]: same device as devices[%zu] at line %u "
                                       "(vendor 0x%08" PRIX32 ", product 0x%08" PRIX32 ", serial 0x%08" PRIX32 ", revision %s)",
                                       name, b->devices[x->index].line, bus_index, x->index, other,
@@ -110,8 +110,8 @@ static int check_identities(const char *name, size_t bus_index, const lssd_bus_c
         return 0;
 }
 
-static void check_node_ids(const char *name, size_t bus_index, const lssd_bus_config *b,
-                           const lssd_bus_src *src, lssd_diag *diag) {
+static void check_node_ids(const char *name, size_t bus_index, const lssconf_bus *b,
+                           const lssconf_bus_src *src, lssconf_diag *diag) {
         size_t first[LSS_NODE_ID_MAX + 1];
         for (size_t i = 0; i <= LSS_NODE_ID_MAX; i++)
                 first[i] = SIZE_MAX;
@@ -124,29 +124,29 @@ static void check_node_ids(const char *name, size_t bus_index, const lssd_bus_co
                         first[nid] = i;
                         continue;
                 }
-                lssd_diag_add(diag, LSSD_DIAG_ERROR,
+                lssconf_diag_add(diag, LSSCONF_DIAG_ERROR,
                               "%s:%u: buses[%zu].devices[%zu].node_id: %u is already mapped to devices[%zu] at line %u",
                               name, src->devices[i].node_id_line, bus_index, i, nid,
                               first[nid], b->devices[first[nid]].line);
         }
 }
 
-static void check_pool(const char *name, size_t bus_index, const lssd_bus_config *b,
-                       const lssd_bus_src *src, lssd_diag *diag) {
-        if (b->unknown != LSSD_UNKNOWN_POOL || !src->pool_ok)
+static void check_pool(const char *name, size_t bus_index, const lssconf_bus *b,
+                       const lssconf_bus_src *src, lssconf_diag *diag) {
+        if (b->unknown != LSSCONF_UNKNOWN_POOL || !src->pool_ok)
                 return;
         for (size_t i = 0; i < b->n_devices; i++) {
                 uint8_t nid = b->devices[i].node_id;
                 if (!src->devices[i].ok || nid < b->pool_lo || nid > b->pool_hi)
                         continue;
-                lssd_diag_add(diag, LSSD_DIAG_ERROR,
+                lssconf_diag_add(diag, LSSCONF_DIAG_ERROR,
                               "%s:%u: buses[%zu].pool: %u..%u contains node-ID %u mapped to devices[%zu] at line %u",
                               name, src->pool_line, bus_index, b->pool_lo, b->pool_hi, nid, i, b->devices[i].line);
         }
 }
 
-int lssd_config_check_bus(const char *name, size_t bus_index, const lssd_bus_config *b,
-                          const lssd_bus_src *src, lssd_diag *diag) {
+int lssconf_check_bus(const char *name, size_t bus_index, const lssconf_bus *b,
+                          const lssconf_bus_src *src, lssconf_diag *diag) {
         check_node_ids(name, bus_index, b, src, diag);
         check_pool(name, bus_index, b, src, diag);
         return check_identities(name, bus_index, b, src, diag);
@@ -165,8 +165,8 @@ static int interface_key_compare(const void *x, const void *y) {
         return a->index < b->index ? -1 : a->index > b->index;
 }
 
-int lssd_config_check_interfaces(const char *name, const lssd_config *c,
-                                 const lssd_bus_src *src, lssd_diag *diag) {
+int lssconf_check_interfaces(const char *name, const lssconf *c,
+                                 const lssconf_bus_src *src, lssconf_diag *diag) {
         interface_key *keys = calloc(c->n_buses ? c->n_buses : 1, sizeof(*keys));
         size_t n = 0;
         if (!keys)
@@ -183,7 +183,7 @@ int lssd_config_check_interfaces(const char *name, const lssd_config *c,
                         continue;
                 }
                 size_t i = keys[k].index, j = keys[first].index;
-                lssd_diag_add(diag, LSSD_DIAG_ERROR,
+                lssconf_diag_add(diag, LSSCONF_DIAG_ERROR,
                               "%s:%u: buses[%zu].interface: \"%s\" is already configured by buses[%zu] at line %u",
                               name, src[i].interface_line, i, keys[k].name, j, c->buses[j].line);
         }

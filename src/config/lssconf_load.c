@@ -11,13 +11,13 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "config/lssd_config.h"
-#include "config/lssd_config_check.h"
-#include "config/lssd_config_prescan.h"
+#include "config/lssconf.h"
+#include "config/lssconf_check.h"
+#include "config/lssconf_prescan.h"
 
 typedef struct loader {
         const char *name;
-        lssd_diag *diag;
+        lssconf_diag *diag;
         int oom; /* -ENOMEM once an allocation failed */
 } loader;
 
@@ -58,7 +58,7 @@ static unsigned setting_line(const config_setting_t *s) {
 }
 
 __attribute__((format(printf, 4, 5)))
-static void report(loader *l, lssd_diag_severity severity, const config_setting_t *s, const char *format, ...) {
+static void report(loader *l, lssconf_diag_severity severity, const config_setting_t *s, const char *format, ...) {
         char path[256], *text;
         va_list ap;
         int r;
@@ -70,13 +70,13 @@ static void report(loader *l, lssd_diag_severity severity, const config_setting_
                 l->oom = -ENOMEM;
                 return;
         }
-        lssd_diag_add(l->diag, severity, "%s:%u: %s: %s", l->name, setting_line(s),
+        lssconf_diag_add(l->diag, severity, "%s:%u: %s: %s", l->name, setting_line(s),
                       setting_path(s, path, sizeof(path)), text);
         free(text);
 }
 
-#define error_at(l, s, ...) report(l, LSSD_DIAG_ERROR, s, __VA_ARGS__)
-#define warning_at(l, s, ...) report(l, LSSD_DIAG_WARNING, s, __VA_ARGS__)
+#define error_at(l, s, ...) report(l, LSSCONF_DIAG_ERROR, s, __VA_ARGS__)
+#define warning_at(l, s, ...) report(l, LSSCONF_DIAG_WARNING, s, __VA_ARGS__)
 
 /* A string from the file, quoted for a message: printable and bounded. */
 static const char *quote(const char *s, char *buf, size_t size) {
@@ -225,19 +225,19 @@ static int get_string(loader *l, const config_setting_t *group, const char *key,
         return 1;
 }
 
-static int get_lss_timing(loader *l, const config_setting_t *group, lssd_lss_timing *ret) {
+static int get_lss_timing(loader *l, const config_setting_t *group, lssconf_lss_timing *ret) {
         const config_setting_t *s;
         const char *v;
         char q[80];
         int r = get_string(l, group, "lss_timing", &v, &s);
         if (r <= 0)
                 return r;
-        int t = lssd_lss_timing_from_string(v);
+        int t = lssconf_lss_timing_from_string(v);
         if (t < 0) {
                 error_at(l, s, "%s is not \"adaptive\" or \"fixed\"", quote(v, q, sizeof(q)));
                 return -EINVAL;
         }
-        *ret = (lssd_lss_timing) t;
+        *ret = (lssconf_lss_timing) t;
         return 1;
 }
 
@@ -250,7 +250,7 @@ typedef struct bus_defaults {
 } bus_defaults;
 
 static void parse_device(loader *l, const config_setting_t *g, const bus_defaults *def,
-                         lssd_device_config *d, lssd_device_src *src) {
+                         lssconf_device *d, lssconf_device_src *src) {
         const config_setting_t *nid;
         long long v;
         bool ok = true;
@@ -301,7 +301,7 @@ static void parse_device(loader *l, const config_setting_t *g, const bus_default
 }
 
 static void parse_devices(loader *l, const config_setting_t *list, const bus_defaults *def,
-                          lssd_bus_config *b, lssd_bus_src *src) {
+                          lssconf_bus *b, lssconf_bus_src *src) {
         if (config_setting_type(list) != CONFIG_TYPE_LIST) {
                 error_at(l, list, "expected a list ( { ... }, ... ), got %s", type_name(list));
                 return;
@@ -323,7 +323,7 @@ static void parse_devices(loader *l, const config_setting_t *list, const bus_def
 
 /* ---- buses ---- */
 
-static void parse_pool(loader *l, const config_setting_t *s, lssd_bus_config *b, lssd_bus_src *src) {
+static void parse_pool(loader *l, const config_setting_t *s, lssconf_bus *b, lssconf_bus_src *src) {
         long long v[2];
         bool ok = true;
 
@@ -351,7 +351,7 @@ static void parse_pool(loader *l, const config_setting_t *s, lssd_bus_config *b,
         src->pool_ok = true;
 }
 
-static void parse_interface(loader *l, const config_setting_t *g, lssd_bus_config *b, lssd_bus_src *src) {
+static void parse_interface(loader *l, const config_setting_t *g, lssconf_bus *b, lssconf_bus_src *src) {
         const config_setting_t *s;
         const char *v;
         char q[80];
@@ -362,7 +362,7 @@ static void parse_interface(loader *l, const config_setting_t *g, lssd_bus_confi
         if (r <= 0)
                 return;
         src->interface_line = setting_line(s);
-        if (!lssd_ifname_valid(v)) {
+        if (!lssconf_ifname_valid(v)) {
                 error_at(l, s, "%s is not a valid interface name (1..15 characters, no '/', ':' or whitespace)",
                          quote(v, q, sizeof(q)));
                 return;
@@ -371,7 +371,7 @@ static void parse_interface(loader *l, const config_setting_t *g, lssd_bus_confi
         src->interface_ok = true;
 }
 
-static void parse_bitrate(loader *l, const config_setting_t *g, lssd_bus_config *b) {
+static void parse_bitrate(loader *l, const config_setting_t *g, lssconf_bus *b) {
         const config_setting_t *s;
         long long v;
 
@@ -396,38 +396,38 @@ static void parse_bitrate(loader *l, const config_setting_t *g, lssd_bus_config 
         b->bitrate = (uint32_t) v;
 }
 
-static void parse_unknown(loader *l, const config_setting_t *g, lssd_bus_config *b, const lssd_bus_src *src) {
+static void parse_unknown(loader *l, const config_setting_t *g, lssconf_bus *b, const lssconf_bus_src *src) {
         const config_setting_t *s, *pool = config_setting_get_member(g, "pool");
         const char *v;
         char q[80];
 
         if (get_string(l, g, "unknown", &v, &s) > 0) {
-                int p = lssd_unknown_policy_from_string(v);
+                int p = lssconf_unknown_policy_from_string(v);
                 if (p < 0) {
                         error_at(l, s, "%s is not \"ignore\" or \"pool\"", quote(v, q, sizeof(q)));
                         return;
                 }
-                b->unknown = (lssd_unknown_policy) p;
+                b->unknown = (lssconf_unknown_policy) p;
         }
-        if (b->unknown == LSSD_UNKNOWN_POOL && !pool)
+        if (b->unknown == LSSCONF_UNKNOWN_POOL && !pool)
                 error_at(l, s, "\"pool\" needs pool = [ lo, hi ] in the same bus");
-        else if (b->unknown != LSSD_UNKNOWN_POOL && pool && src->pool_ok)
+        else if (b->unknown != LSSCONF_UNKNOWN_POOL && pool && src->pool_ok)
                 warning_at(l, pool, "ignored unless unknown = \"pool\"");
 }
 
-static void parse_bus(loader *l, const config_setting_t *g, const lssd_config *c,
-                      lssd_bus_config *b, lssd_bus_src *src) {
+static void parse_bus(loader *l, const config_setting_t *g, const lssconf *c,
+                      lssconf_bus *b, lssconf_bus_src *src) {
         const config_setting_t *s;
         bus_defaults def = {};
         long long v;
         int r;
 
-        *b = (lssd_bus_config) {
-                .bitrate = LSSD_BITRATE_DEFAULT,
+        *b = (lssconf_bus) {
+                .bitrate = LSSCONF_BITRATE_DEFAULT,
                 .lss_timeout_ms = c->lss_timeout_ms,
                 .lss_timing = c->lss_timing,
                 .store = true,
-                .unknown = LSSD_UNKNOWN_IGNORE,
+                .unknown = LSSCONF_UNKNOWN_IGNORE,
                 .line = setting_line(g),
         };
         if (config_setting_type(g) != CONFIG_TYPE_GROUP) {
@@ -450,7 +450,7 @@ static void parse_bus(loader *l, const config_setting_t *g, const lssd_config *c
         parse_unknown(l, g, b, src);
 
         /* 0 = inherit the global value */
-        if (get_integer(l, g, "lss_timeout_ms", 0, LSSD_LSS_TIMEOUT_MS_MAX, &v, NULL) > 0 && v > 0)
+        if (get_integer(l, g, "lss_timeout_ms", 0, LSSCONF_LSS_TIMEOUT_MS_MAX, &v, NULL) > 0 && v > 0)
                 b->lss_timeout_ms = (uint32_t) v;
         (void) get_lss_timing(l, g, &b->lss_timing);
 
@@ -468,21 +468,21 @@ static void parse_bus(loader *l, const config_setting_t *g, const lssd_config *c
                 parse_devices(l, s, &def, b, src);
 }
 
-static void parse_root(loader *l, const config_setting_t *root, lssd_config *c, lssd_bus_src **ret_src) {
+static void parse_root(loader *l, const config_setting_t *root, lssconf *c, lssconf_bus_src **ret_src) {
         const config_setting_t *buses;
         long long v;
 
         warn_unknown_keys(l, root, root_keys);
-        if (get_integer(l, root, "lss_timeout_ms", 1, LSSD_LSS_TIMEOUT_MS_MAX, &v, NULL) > 0)
+        if (get_integer(l, root, "lss_timeout_ms", 1, LSSCONF_LSS_TIMEOUT_MS_MAX, &v, NULL) > 0)
                 c->lss_timeout_ms = (uint32_t) v;
         (void) get_lss_timing(l, root, &c->lss_timing);
-        if (get_integer(l, root, "boot_ready_limit_s", 1, LSSD_BOOT_READY_LIMIT_S_MAX, &v, NULL) > 0)
+        if (get_integer(l, root, "boot_ready_limit_s", 1, LSSCONF_BOOT_READY_LIMIT_S_MAX, &v, NULL) > 0)
                 c->boot_ready_limit_s = (uint32_t) v;
 
         buses = config_setting_get_member(root, "buses");
         if (!buses) {
                 /* an empty or truncated file must not pass for a configuration that serves nothing */
-                lssd_diag_add(l->diag, LSSD_DIAG_ERROR, "%s:1: no buses configured (no 'buses' list)", l->name);
+                lssconf_diag_add(l->diag, LSSCONF_DIAG_ERROR, "%s:1: no buses configured (no 'buses' list)", l->name);
                 return;
         }
         if (config_setting_type(buses) != CONFIG_TYPE_LIST) {
@@ -497,7 +497,7 @@ static void parse_root(loader *l, const config_setting_t *root, lssd_config *c, 
         }
 
         c->buses = calloc(n, sizeof(*c->buses));
-        lssd_bus_src *src = *ret_src = calloc(n, sizeof(*src));
+        lssconf_bus_src *src = *ret_src = calloc(n, sizeof(*src));
         if (!c->buses || !src) {
                 l->oom = -ENOMEM;
                 return;
@@ -507,36 +507,37 @@ static void parse_root(loader *l, const config_setting_t *root, lssd_config *c, 
                 parse_bus(l, config_setting_get_elem(buses, (unsigned) i), c, &c->buses[i], &src[i]);
                 if (l->oom < 0)
                         return;
-                if (lssd_config_check_bus(l->name, i, &c->buses[i], &src[i], l->diag) < 0)
+                if (lssconf_check_bus(l->name, i, &c->buses[i], &src[i], l->diag) < 0)
                         l->oom = -ENOMEM;
         }
-        if (lssd_config_check_interfaces(l->name, c, src, l->diag) < 0)
+        if (lssconf_check_interfaces(l->name, c, src, l->diag) < 0)
                 l->oom = -ENOMEM;
 }
 
 /* ---- entry points ---- */
 
-static int load_tree(loader *l, const char *text, unsigned open_comment_line, lssd_config **ret) {
-        lssd_bus_src *src = NULL;
-        lssd_config *c = NULL;
+static int load_tree(loader *l, const char *text, unsigned open_comment_line, lssconf **ret) {
+        lssconf_bus_src *src = NULL;
+        lssconf *c = NULL;
         size_t n_src = 0;
         config_t cfg;
         int r;
 
         config_init(&cfg);
         if (!config_read_string(&cfg, text)) {
-                lssd_diag_add(l->diag, LSSD_DIAG_ERROR, "%s:%d: %s", l->name, config_error_line(&cfg),
+                lssconf_diag_add(l->diag, LSSCONF_DIAG_ERROR, "%s:%d: %s", l->name, config_error_line(&cfg),
                               config_error_text(&cfg) ? config_error_text(&cfg) : "cannot parse");
                 r = -EINVAL;
                 goto finish;
         }
         if (open_comment_line > 0) {
-                lssd_diag_add(l->diag, LSSD_DIAG_ERROR, "%s:%u: unterminated /* comment", l->name, open_comment_line);
+                lssconf_diag_add(l->diag, LSSCONF_DIAG_ERROR, "%s:%u: unterminated /* comment", l->name,
+                                 open_comment_line);
                 r = -EINVAL;
                 goto finish;
         }
 
-        r = lssd_config_new(&c);
+        r = lssconf_new(&c);
         if (r < 0)
                 goto finish;
         c->source = strdup(l->name);
@@ -560,14 +561,14 @@ finish:
         for (size_t i = 0; i < n_src; i++)
                 free(src[i].devices);
         free(src);
-        lssd_config_free(c);
+        lssconf_free(c);
         config_destroy(&cfg);
         return r;
 }
 
-int lssd_config_load_buffer(const char *text, size_t len, const char *name,
-                            lssd_config **ret, lssd_diag *diag) {
-        lssd_diag local = LSSD_DIAG_INIT;
+int lssconf_load_buffer(const char *text, size_t len, const char *name,
+                            lssconf **ret, lssconf_diag *diag) {
+        lssconf_diag local = LSSCONF_DIAG_INIT;
         loader l = {
                 .name = name ? name : "(config)",
                 .diag = diag ? diag : &local,
@@ -576,29 +577,29 @@ int lssd_config_load_buffer(const char *text, size_t len, const char *name,
         char *fixed = NULL;
 
         *ret = NULL;
-        int r = lssd_config_prescan(text, len, l.name, l.diag, &fixed, &open_comment_line);
+        int r = lssconf_prescan(text, len, l.name, l.diag, &fixed, &open_comment_line);
         if (r >= 0)
                 r = load_tree(&l, fixed, open_comment_line, ret);
         free(fixed);
-        lssd_diag_clear(&local);
+        lssconf_diag_clear(&local);
         return r;
 }
 
-/* Reads at most LSSD_CONFIG_SIZE_MAX bytes; -EFBIG if there is more. */
+/* Reads at most LSSCONF_SIZE_MAX bytes; -EFBIG if there is more. */
 static int read_all(int fd, char **ret, size_t *ret_len) {
         size_t len = 0, allocated = 0;
         char *buf = NULL;
 
         for (;;) {
                 if (len == allocated) {
-                        if (allocated > LSSD_CONFIG_SIZE_MAX) {
+                        if (allocated > LSSCONF_SIZE_MAX) {
                                 free(buf);
                                 return -EFBIG;
                         }
                         /* one byte over the limit tells "too big" from "exactly the limit" */
                         size_t n = allocated ? allocated * 2 : 16384;
-                        if (n > LSSD_CONFIG_SIZE_MAX)
-                                n = LSSD_CONFIG_SIZE_MAX + 1;
+                        if (n > LSSCONF_SIZE_MAX)
+                                n = LSSCONF_SIZE_MAX + 1;
                         char *b = realloc(buf, n);
                         if (!b) {
                                 free(buf);
@@ -619,7 +620,7 @@ static int read_all(int fd, char **ret, size_t *ret_len) {
                         break;
                 len += (size_t) k;
         }
-        if (len > LSSD_CONFIG_SIZE_MAX) {
+        if (len > LSSCONF_SIZE_MAX) {
                 free(buf);
                 return -EFBIG;
         }
@@ -628,9 +629,9 @@ static int read_all(int fd, char **ret, size_t *ret_len) {
         return 0;
 }
 
-int lssd_config_load_file(const char *path, lssd_config **ret, lssd_diag *diag) {
-        lssd_diag local = LSSD_DIAG_INIT;
-        lssd_diag *d = diag ? diag : &local;
+int lssconf_load_file(const char *path, lssconf **ret, lssconf_diag *diag) {
+        lssconf_diag local = LSSCONF_DIAG_INIT;
+        lssconf_diag *d = diag ? diag : &local;
         char *text = NULL;
         size_t len = 0;
         int r;
@@ -639,23 +640,23 @@ int lssd_config_load_file(const char *path, lssd_config **ret, lssd_diag *diag) 
         int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY);
         if (fd < 0) {
                 r = -errno;
-                lssd_diag_add(d, LSSD_DIAG_ERROR, "%s: cannot open: %s", path, strerror(-r));
+                lssconf_diag_add(d, LSSCONF_DIAG_ERROR, "%s: cannot open: %s", path, strerror(-r));
                 goto finish;
         }
         r = read_all(fd, &text, &len);
         close(fd);
         if (r == -EFBIG)
-                lssd_diag_add(d, LSSD_DIAG_ERROR, "%s: larger than %u bytes, refusing to read it",
-                              path, LSSD_CONFIG_SIZE_MAX);
+                lssconf_diag_add(d, LSSCONF_DIAG_ERROR, "%s: larger than %u bytes, refusing to read it",
+                              path, LSSCONF_SIZE_MAX);
         else if (r < 0 && r != -ENOMEM)
-                lssd_diag_add(d, LSSD_DIAG_ERROR, "%s: cannot read: %s", path, strerror(-r));
+                lssconf_diag_add(d, LSSCONF_DIAG_ERROR, "%s: cannot read: %s", path, strerror(-r));
         if (r < 0)
                 goto finish;
 
-        r = lssd_config_load_buffer(text, len, path, ret, d);
+        r = lssconf_load_buffer(text, len, path, ret, d);
 
 finish:
         free(text);
-        lssd_diag_clear(&local);
+        lssconf_diag_clear(&local);
         return r;
 }

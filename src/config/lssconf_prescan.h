@@ -19,11 +19,11 @@
 
 #include <stddef.h>
 
-#include "config/lssd_diag.h"
+#include "config/lssconf_diag.h"
 
 /* On success *ret is a new NUL-terminated copy of text, possibly with
  * suffixes added, and *ret_open_comment_line the line of a comment left open
  * (0 if none; the caller reports it unless libconfig finds an earlier
  * syntax error). -EINVAL with errors in diag, -ENOMEM. */
-int lssd_config_prescan(const char *text, size_t len, const char *name, lssd_diag *diag,
+int lssconf_prescan(const char *text, size_t len, const char *name, lssconf_diag *diag,
                         char **ret, unsigned *ret_open_comment_line);
