@@ -305,7 +305,7 @@ int lss_master_unassign(lss_master *m, const lss_identity *id, unsigned flags, u
 
 /* ---- SDO identity discovery (lss_sdo_discover.c) ---- */
 
-#define LSS_SDO_WINDOW_DEFAULT 8u
+#define LSS_SDO_WINDOW_DEFAULT 16u
 #define LSS_SDO_WINDOW_MAX 16u
 typedef struct lss_sdo_discover_params {
         uint8_t first, last;  /* node-IDs to ask, 1..127, first <= last */

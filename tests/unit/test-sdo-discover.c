@@ -108,7 +108,7 @@ START_TEST(sdo_discover_empty) {
         ck_assert_uint_eq(r->n_devices, 0);
         ck_assert_uint_eq(w.requests, 2 * 127);
         ck_assert_uint_eq(w.other_master, 0);
-        /* 16 rounds of 8 node-IDs, each waiting a quarter of the 20 ms limit
+        /* 8 rounds of 16 node-IDs, each waiting a quarter of the 20 ms limit
          * twice, and the full limit once at the end (0.71 s when first
          * contact waited the full limit) */
         uint64_t took = membus_now(b) - t0;
