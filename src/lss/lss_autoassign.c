@@ -158,8 +158,7 @@ static int handle_found(lss_master *m, lss_aa_state *s) {
                         /* a pool ID somebody already answers to: take the next one */
                         if (s->entry < 0 && s->replacing < 0 && m->result.in_use) {
                                 s->used[s->target] = true;
-                                m->result.status = LSS_OK;
-                                m->result.in_use = false;
+                                aa_result_reset(m);
                                 s->target = pool_next(s);
                                 if (s->target != 0)
                                         continue;
@@ -212,7 +211,7 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                                 STEP_REQUEST(m, &s->d_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
                         }
                 } else
-                        m->result.status = LSS_OK;
+                        aa_result_reset(m);
         }
 
         /* 2. no revision in the map: bisect the revision for that serial */
@@ -224,7 +223,7 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                                                      s->plan->map[s->i].id.serial };
                 m->sc.pc = m->sc.vpc = 0;
                 PT_CALL(&s->d_pc, proc_slowscan(m, &m->sc));
-                m->result.status = LSS_OK;
+                aa_result_reset(m);
                 if (aa_todo_take(s, m->devices, m->n_devices) < 0)
                         continue;
                 s->i_pc = 0;
@@ -305,7 +304,7 @@ static int proc_autoassign(lss_master *m) {
                         aa_enumeration_failed(s, m);
                         break;
                 }
-                m->result.status = LSS_OK;
+                aa_result_reset(m);
                 if (aa_todo_take(s, m->devices, m->n_devices) < 0)
                         continue;
                 s->given_before = aa_count_given(s);

@@ -75,7 +75,10 @@ void aa_record(lss_master *m, lss_aa_state *s, const lss_identity *id, enum lss_
                 return;
         o->old_node_id = r->node_id;
         o->status = r->status;
-        snprintf(o->message, sizeof(o->message), "%s", r->message);
+        /* only a failure's message is this device's: one of an earlier
+         * step of the pass (set aside as its own outcome) may still be there;
+         * a success clears what a first look wrote here */
+        snprintf(o->message, sizeof(o->message), "%s", r->status != LSS_OK ? r->message : "");
         if (r->status == LSS_OK) {
                 o->kind = !r->changed && given != LSS_OUTCOME_REPLACED ? LSS_OUTCOME_UNCHANGED : given;
                 o->new_node_id = s->target;
@@ -104,6 +107,10 @@ void aa_record(lss_master *m, lss_aa_state *s, const lss_identity *id, enum lss_
                 snprintf(o->message, sizeof(o->message), "found on a second look, with waits of %u ms",
                          m->timing.cfg.timeout_us / 1000);
         /* the pass goes on: one device's trouble is its own outcome */
+        aa_result_reset(m);
+}
+
+void aa_result_reset(lss_master *m) {
         m->result.status = LSS_OK;
         m->result.failed_service = LSS_SERVICE_NONE;
         m->result.reason = LSS_REASON_NONE;
@@ -122,7 +129,7 @@ void aa_enumeration_failed(lss_aa_state *s, lss_master *m) {
                 o->old_node_id = o->new_node_id = 0;
                 snprintf(o->message, sizeof(o->message), "%s", m->result.message);
         }
-        m->result.status = LSS_OK;
+        aa_result_reset(m);
 }
 
 /* The outcome of a found device that gets no node-ID. */

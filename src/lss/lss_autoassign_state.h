@@ -40,7 +40,7 @@ typedef struct lss_aa_state {
         unsigned blind_passes;
         bool avoid[128];        /* node-IDs an enumeration may not set a slave aside with */
         enum lss_status failed; /* an enumeration met a slave that does not follow CiA 305 */
-        char failed_msg[160];
+        char failed_msg[400];
         /* 1018h read by SDO (lss_autoassign_sdo.c) */
         int s_pc;
         bool sdo_read;          /* done in this pass (once at most) */
@@ -81,6 +81,9 @@ int aa_lookup(const lss_autoassign_plan *p, const lss_identity *id);
 /* The result of an assignment as the device's outcome; `given`: its kind
  * when the device got a node-ID (assigned, pool, replaced). */
 void aa_record(lss_master *m, lss_aa_state *s, const lss_identity *id, enum lss_outcome_kind given);
+/* The pass goes on after a step whose failure it dealt with: nothing of
+ * that failure (status, codes, message) is left for the next step's outcome. */
+void aa_result_reset(lss_master *m);
 /* The misbehaving slave of an enumeration: the pass's error and its outcome. */
 void aa_enumeration_failed(lss_aa_state *s, lss_master *m);
 /* The outcome of a found device that gets no node-ID. */

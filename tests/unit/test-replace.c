@@ -105,6 +105,28 @@ START_TEST(replaced_by_new_device) {
 }
 END_TEST
 
+/* Each outcome's detail is its own: the missing entry's "no slave answered"
+ * stays with it, not with the mapped device dealt with next (seen with the
+ * missing entry first in the map: lssctl and the journal gave the present
+ * device the missing one's failure). */
+START_TEST(details_stay_with_their_device) {
+        const lss_identity *on_bus[] = { &NEW };
+        membus *b = bus_with(on_bus, 1);
+        lss_map_entry map[] = {
+                { .id = OLD, .revision_known = true, .node_id = 12 },
+                { .id = C, .revision_known = true, .node_id = 6 },
+        };
+        lss_autoassign_plan p = { .map = map, .n_map = 2, .store = true, .replace = true };
+        tally c;
+        lss_master *m = traced_pass(b, &c, &p);
+        const lss_outcome *o = expect_outcome(m, &C, LSS_OUTCOME_UNCHANGED);
+        ck_assert_msg(o->message[0] == 0, "C: %s", o->message);
+        expect_replaced(m, &NEW, &OLD, 0xFF, 12);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* Two candidates for one missing device, or one for two: nobody is
  * replaced (a guess would give a node-ID, and the configuration behind it,
  * to the wrong device), with or without a pool, and the outcomes say why. */
@@ -234,6 +256,7 @@ int main(void) {
         TCase *tc = tcase_create("replace");
         tcase_set_timeout(tc, 120);
         tcase_add_test(tc, replaced_by_new_device);
+        tcase_add_test(tc, details_stay_with_their_device);
         tcase_add_test(tc, two_candidates_are_ambiguous);
         tcase_add_test(tc, two_missing_are_ambiguous);
         tcase_add_test(tc, replace_off_changes_nothing);
