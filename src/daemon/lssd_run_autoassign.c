@@ -155,7 +155,7 @@ static int fill_outcomes(sd_bus_message *reply, const void *userdata) {
         int k = sd_bus_message_open_container(reply, 'a', "(uuuuyyss)");
         for (size_t i = 0; k >= 0 && i < a->n; i++) {
                 const lss_outcome *o = &a->out[i];
-                char detail[200];
+                char detail[440];
                 outcome_detail(o, detail, sizeof(detail));
                 k = sd_bus_message_append(reply, "(uuuuyyss)", o->id.vendor, o->id.product, o->id.revision,
                                           o->id.serial, o->old_node_id, o->new_node_id, outcome_name(o), detail);

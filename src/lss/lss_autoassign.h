@@ -90,7 +90,7 @@ typedef struct lss_outcome {
         bool replacing;      /* `replaced` is set */
         uint8_t err;
         enum lss_status status;
-        char message[160];
+        char message[400];
 } lss_outcome;
 
 /* Starts the pass. The plan (and its map) must stay valid until it is done. */

@@ -84,7 +84,7 @@ static void progress(lss_master *m, lss_bitrate_state *s, unsigned phase) {
 
 static int proc_bitrate(lss_master *m) {
         lss_bitrate_state *s = &m->br;
-        char ids[120];
+        char ids[300];
 
         PT_BEGIN(&s->pc);
 

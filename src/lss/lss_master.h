@@ -159,7 +159,7 @@ typedef struct lss_result {
          * ascending (owned by the engine until the next start) */
         lss_sdo_node *sdo_nodes;
         size_t n_sdo_nodes;
-        char message[160];   /* human-readable detail for errors */
+        char message[400];   /* human-readable detail for errors */
 } lss_result;
 
 typedef struct lss_master_stats {
