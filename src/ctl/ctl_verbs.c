@@ -129,9 +129,11 @@ static int append_bool_option(sd_bus_message *m, const char *key, bool value) {
 static void print_outcome_summary(const results *res, bool dry_run) {
         static const char *const kinds[] = { "assigned", "pool", "replaced", "unchanged", "unknown", "missing",
                                              "conflict", "failed" };
+        /* node-IDs given (assigned, pool); replacements are counted apart */
         size_t changed = 0;
         for (size_t i = 0; i < res->n; i++)
-                changed += outcome_is_change(res->v[i].outcome);
+                changed += outcome_is_change(res->v[i].outcome) && strcmp(res->v[i].outcome, "replaced") != 0 &&
+                           strcmp(res->v[i].outcome, "would-replace") != 0;
         if (dry_run)
                 printf("Dry run, nothing was configured: %zu node-ID%s would be assigned", changed,
                        changed == 1 ? "" : "s");
@@ -140,9 +142,11 @@ static void print_outcome_summary(const results *res, bool dry_run) {
         for (size_t k = 2; k < sizeof(kinds) / sizeof(kinds[0]); k++) {
                 size_t n = 0;
                 for (size_t i = 0; i < res->n; i++)
-                        n += strcmp(res->v[i].outcome, kinds[k]) == 0;
+                        n += strcmp(res->v[i].outcome, kinds[k]) == 0 ||
+                             (strcmp(kinds[k], "replaced") == 0 && strcmp(res->v[i].outcome, "would-replace") == 0);
                 if (n > 0)
-                        printf(", %zu %s", n, kinds[k]);
+                        printf(", %zu %s%s", n, dry_run && strcmp(kinds[k], "replaced") == 0 ? "would be " : "",
+                               kinds[k]);
         }
         printf(".\n");
 }

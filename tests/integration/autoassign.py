@@ -349,6 +349,9 @@ def test_replace():
                  NEW.identity)
         expect(entry in out and 'Replace the map entry of the missing device' in out, 'lssctl output: %r' % out)
         expect('replaced by' in err, 'lssctl: the missing device says by whom: %r' % err)
+        # the replacement is counted as one, not also as an assignment
+        expect('0 node-IDs assigned, 1 replaced, 1 unchanged, 1 unknown, 1 missing.' in out,
+               'lssctl summary: %r' % out)
         env.alive()
 
 
