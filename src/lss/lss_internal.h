@@ -130,6 +130,7 @@ typedef struct lss_scan_state {
         lss_identify_range range;
         lss_fastscan_state fs;
         unsigned pass, i, dropped, failed_scans, attempt, unresolved;
+        lss_identity dropped_id;  /* slowscan: the first slave counted in dropped */
         unsigned gap_passes;    /* slowscan: times the ranges between the slaves found were asked again */
         size_t n_before_gaps;   /* slowscan: slaves found before the last of those */
         bool heard;             /* slowscan: some range answered */

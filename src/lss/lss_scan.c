@@ -74,6 +74,12 @@ static lss_range_item parent_of(const lss_range_item *hi) {
         return p;
 }
 
+/* The candidate just found did not verify: counted, the first one named. */
+static void drop(lss_scan_state *s) {
+        if (s->dropped++ == 0)
+                s->dropped_id = s->cand[s->n_cand - 1].id;
+}
+
 /* Identify Remote Slave for one range (6 frames), waiting for 0x4F. */
 static void step_identify(lss_master *m, const lss_scan_state *s, const lss_range_item *it) {
         const uint32_t v[6] = { s->range.vendor, s->range.product, it->rlo, it->rhi, it->slo, it->shi };
@@ -109,7 +115,7 @@ static int verify_candidate(lss_master *m, lss_scan_state *s) {
                 STEP_REQUEST(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
                 SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->n_cand - 1].id);
                 if (!step_answered(m)) {
-                        s->dropped++;
+                        drop(s);
                         goto out;
                 }
         }
@@ -123,7 +129,7 @@ static int verify_candidate(lss_master *m, lss_scan_state *s) {
                 else
                         master_found(m, &c->id, c->node_id, 0);
         } else
-                s->dropped++;
+                drop(s);
         STEP_REQUEST(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
 out:;
         PT_END(&s->vpc);
@@ -271,15 +277,19 @@ again:
                 if (s->dropped > 0)
                         master_fail(m, LSS_E_INCOMPLETE,
                                     "%u ranges answered identify each time but neither half did (not CiA 305, or "
-                                    "answers lost); %u slaves answered identify but not the selective switch",
-                                    s->unresolved, s->dropped);
+                                    "answers lost); %u slaves answered identify but not the selective switch (%s%08x:%08x:"
+                                    "%08x:%08x)", s->unresolved, s->dropped, s->dropped > 1 ? "first " : "",
+                                    s->dropped_id.vendor, s->dropped_id.product, s->dropped_id.revision,
+                                    s->dropped_id.serial);
                 else
                         master_fail(m, LSS_E_INCOMPLETE,
                                     "%u ranges answered identify each time but neither half did (not CiA 305, or "
                                     "answers lost)", s->unresolved);
         } else if (s->dropped > 0)
-                master_fail(m, LSS_E_INCOMPLETE, "%u slaves answered identify but not the selective switch",
-                            s->dropped);
+                master_fail(m, LSS_E_INCOMPLETE,
+                            "%u slaves answered identify but not the selective switch (%s%08x:%08x:%08x:%08x)",
+                            s->dropped, s->dropped > 1 ? "first " : "", s->dropped_id.vendor, s->dropped_id.product,
+                            s->dropped_id.revision, s->dropped_id.serial);
         goto out;
 oom:
         master_fail(m, LSS_E_INCOMPLETE, "out of memory");

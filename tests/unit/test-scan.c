@@ -2,6 +2,8 @@
 /* Slowscan: identify-remote bisection finds configured and non-configured
  * slaves of one vendor/product, each verified, nothing changed. Both scans
  * keep every slave when frames are lost on the way to the slaves. */
+#include <stdio.h>
+
 #include "engine-util.h"
 
 static lss_identify_range full_range(uint32_t vendor, uint32_t product) {
@@ -109,6 +111,11 @@ START_TEST(slowscan_unverifiable) {
         ck_assert_int_eq(res->status, LSS_E_INCOMPLETE);
         ck_assert_uint_eq(res->n_devices, 2);
         assert_devices_real(b, res);
+        /* the message names it (SetBitrate's refusal quotes it) */
+        const lss_identity *bad = &membus_slave(b, 1)->id;
+        char named[64];
+        snprintf(named, sizeof(named), "(%08x:%08x:%08x:%08x)", bad->vendor, bad->product, bad->revision, bad->serial);
+        ck_assert_msg(strstr(res->message, named), "%s", res->message);
         /* the unverified candidate was never announced */
         found_log_check(&fl, res, membus_now(b), true);
         ck_assert(all_waiting(b));
