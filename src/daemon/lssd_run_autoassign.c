@@ -49,7 +49,9 @@ static void autoassign_publish_one(lssd_job_env *e, const lssd_job *j, const lss
 
         if (missing && autoassign_mark_missing(e, j, o))
                 return;
-        int k = lssd_devices_get(e->devices, &o->id, outcome_revision_known(j, o), node_id, lssd_realtime_us(), &d);
+        /* a device first known as missing was never seen: LastSeen 0 */
+        int k = lssd_devices_get(e->devices, &o->id, outcome_revision_known(j, o), node_id,
+                                 missing ? 0 : lssd_realtime_us(), &d);
         if (k < 0) {
                 log_error("%s: failed to record device %s: %s", e->ifname,
                           lssd_identity_format(&o->id, ident, sizeof(ident)), strerror(-k));

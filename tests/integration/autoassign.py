@@ -331,6 +331,8 @@ def test_replace():
         expect_eq((env.get(p, DEVICE_IFACE, 'NodeId'), env.get(p, DEVICE_IFACE, 'State'),
                    env.get(p, DEVICE_IFACE, 'MappedNodeId')), (12, 'assigned', 0), 'the new device object')
         expect_eq(env.get(device_path('vcan0', V, P, 0, OLD), DEVICE_IFACE, 'State'), 'missing', 'the old device object')
+        expect_eq(env.get(device_path('vcan0', V, P, 0, OLD), DEVICE_IFACE, 'LastSeen'), 0,
+                  'LastSeen of the old device, never seen')
         expect_eq(env.get(B0, BUS_IFACE, 'LastPass')[4].get('replaced'), 1, 'LastPass counts')
         if env.real:
             expect_eq(slave_ids(env, 'vcan0', [NEW, OTHER]), {NEW.serial: (12, 12), OTHER.serial: (255, 255)},
