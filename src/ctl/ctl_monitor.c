@@ -278,7 +278,7 @@ static int on_signal_message(sd_bus_message *m, void *userdata, sd_bus_error *re
                                 putchar(' ');
                                 dump_value(m, NULL, stdout, false);
                         }
-                } else if (strcmp(member, "UnknownDevice") == 0) {
+                } else if (strcmp(member, LSSD_SIGNAL_UNKNOWN_DEVICE) == 0) {
                         uint32_t id[4];
                         if (sd_bus_message_read(m, "uuuu", &id[0], &id[1], &id[2], &id[3]) >= 0)
                                 printf(" UnknownDevice 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32,

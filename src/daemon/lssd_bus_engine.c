@@ -68,8 +68,8 @@ static void bus_job_end(lssd_bus *b) {
         }
         /* the boot pass has no caller but its end matters to everybody */
         if ((j->request || j->type == LSSD_JOB_AUTO_ASSIGN) && b->host.dbus && b->slot)
-                (void) sd_bus_emit_signal(b->host.dbus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss", lssd_job_name(j),
-                                          j->result ? j->result : "failed");
+                (void) sd_bus_emit_signal(b->host.dbus, b->path, LSSD_BUS_IFACE, LSSD_SIGNAL_JOB_FINISHED, "ss",
+                                          lssd_job_name(j), j->result ? j->result : "failed");
         lssd_job_free(j);
 }
 

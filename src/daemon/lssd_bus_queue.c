@@ -101,8 +101,9 @@ void lssd_bus_stop(lssd_bus *b, const char *why) {
                 if (j->request) {
                         lssd_job_abort(j, LSSD_ERROR_CANCELLED, why);
                         if (b->host.dbus && b->slot)
-                                (void) sd_bus_emit_signal(b->host.dbus, b->path, LSSD_BUS_IFACE, "JobFinished", "ss",
-                                                          lssd_job_name(j), "cancelled");
+                                (void) sd_bus_emit_signal(b->host.dbus, b->path, LSSD_BUS_IFACE,
+                                                          LSSD_SIGNAL_JOB_FINISHED, "ss", lssd_job_name(j),
+                                                          "cancelled");
                 }
                 lssd_job_free(j);
         }

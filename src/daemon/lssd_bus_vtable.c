@@ -394,13 +394,13 @@ const sd_bus_vtable lssd_bus_vtable[] = {
                                 SD_BUS_RESULT("av", results),
                                 method_execute, SD_BUS_VTABLE_UNPRIVILEGED),
 
-        SD_BUS_SIGNAL_WITH_ARGS("DeviceFound", SD_BUS_ARGS("o", device), 0),
-        SD_BUS_SIGNAL_WITH_ARGS("NodeIdAssigned", SD_BUS_ARGS("o", device, "y", old, "y", new), 0),
-        SD_BUS_SIGNAL_WITH_ARGS("UnknownDevice",
+        SD_BUS_SIGNAL_WITH_ARGS(LSSD_SIGNAL_DEVICE_FOUND, SD_BUS_ARGS("o", device), 0),
+        SD_BUS_SIGNAL_WITH_ARGS(LSSD_SIGNAL_NODE_ID_ASSIGNED, SD_BUS_ARGS("o", device, "y", old, "y", new), 0),
+        SD_BUS_SIGNAL_WITH_ARGS(LSSD_SIGNAL_UNKNOWN_DEVICE,
                                 SD_BUS_ARGS("u", vendor, "u", product, "u", revision, "u", serial), 0),
-        SD_BUS_SIGNAL_WITH_ARGS("DeviceReplaced",
+        SD_BUS_SIGNAL_WITH_ARGS(LSSD_SIGNAL_DEVICE_REPLACED,
                                 SD_BUS_ARGS("(uuuu)", old, "(uuuu)", new, "y", node_id), 0),
-        SD_BUS_SIGNAL_WITH_ARGS("JobFinished", SD_BUS_ARGS("s", job, "s", result), 0),
+        SD_BUS_SIGNAL_WITH_ARGS(LSSD_SIGNAL_JOB_FINISHED, SD_BUS_ARGS("s", job, "s", result), 0),
 
         SD_BUS_VTABLE_END
 };

@@ -55,7 +55,7 @@ int lssd_run_assign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
                 lssd_devices_refresh(e->devices);
                 if (r->changed && e->dbus)
-                        (void) sd_bus_emit_signal(e->dbus, e->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
+                        (void) sd_bus_emit_signal(e->dbus, e->path, LSSD_BUS_IFACE, LSSD_SIGNAL_NODE_ID_ASSIGNED, "oyy",
                                                   d->path, old, j->node_id);
         } else
                 log_error("%s: failed to record device %s: %s", e->ifname, ident, strerror(-k));
@@ -134,7 +134,7 @@ int lssd_run_unassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
                 lssd_devices_refresh(e->devices);
                 if (r->in_effect && old != LSS_NODE_ID_UNCONFIGURED && e->dbus)
-                        (void) sd_bus_emit_signal(e->dbus, e->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
+                        (void) sd_bus_emit_signal(e->dbus, e->path, LSSD_BUS_IFACE, LSSD_SIGNAL_NODE_ID_ASSIGNED, "oyy",
                                                   d->path, old, LSS_NODE_ID_UNCONFIGURED);
         } else
                 log_error("%s: failed to record device %s: %s", e->ifname, ident, strerror(-k));

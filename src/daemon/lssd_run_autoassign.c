@@ -211,13 +211,16 @@ int lssd_run_autoassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                         const lss_outcome *o = &out[i];
                         lssd_device *d = lssd_devices_find(e->devices, &o->id);
                         if (outcome_changed(o) && d)
-                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "NodeIdAssigned", "oyy",
-                                                          d->path, o->old_node_id, o->new_node_id);
+                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE,
+                                                          LSSD_SIGNAL_NODE_ID_ASSIGNED, "oyy", d->path,
+                                                          o->old_node_id, o->new_node_id);
                         else if (o->kind == LSS_OUTCOME_UNKNOWN)
-                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu",
-                                                          o->id.vendor, o->id.product, o->id.revision, o->id.serial);
+                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, LSSD_SIGNAL_UNKNOWN_DEVICE,
+                                                          "uuuu", o->id.vendor, o->id.product, o->id.revision,
+                                                          o->id.serial);
                         if (o->kind == LSS_OUTCOME_REPLACED && !o->dry)
-                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "DeviceReplaced", "(uuuu)(uuuu)y",
+                                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, LSSD_SIGNAL_DEVICE_REPLACED,
+                                                          "(uuuu)(uuuu)y",
                                                           o->replaced.vendor, o->replaced.product,
                                                           o->replaced.revision, o->replaced.serial, o->id.vendor,
                                                           o->id.product, o->id.revision, o->id.serial, o->new_node_id);

@@ -105,10 +105,10 @@ static void scan_announce(lssd_job_env *e, lssd_job *j, const lss_device *f, con
         if (!bus)
                 return;
         if (d)
-                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "DeviceFound", "o", d->path);
+                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, LSSD_SIGNAL_DEVICE_FOUND, "o", d->path);
         if (!lssconf_lookup_device(e->config, &f->id))
-                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, "UnknownDevice", "uuuu", f->id.vendor,
-                                          f->id.product, f->id.revision, f->id.serial);
+                (void) sd_bus_emit_signal(bus, e->path, LSSD_BUS_IFACE, LSSD_SIGNAL_UNKNOWN_DEVICE, "uuuu",
+                                          f->id.vendor, f->id.product, f->id.revision, f->id.serial);
 }
 
 void lssd_scan_found(lssd_job_env *e, lssd_job *j, const lss_device *f) {

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* The one list of lssd's D-Bus names: the bus name, object paths, interface
- * names and the org.lssd.LSS1.Error.* names with their errno and the exit
- * status lssctl gives each. The daemon (lssd_errors.c, lssd_path.c, the
+ * and signal names, option names, and the org.lssd.LSS1.Error.* names with
+ * their errno and the exit status lssctl gives each. The daemon (lssd_errors.c, lssd_path.c, the
  * vtables), lssctl (ctl_errors.c) and the Python test harness
  * (tests/integration/lssdtest.py reads this file) all take them from here.
  * Plain C preprocessor only: no sd-bus, so any layer may include it.
@@ -17,6 +17,13 @@
 #define LSSD_MANAGER_IFACE  LSSD_BUS_NAME ".Manager"
 #define LSSD_BUS_IFACE      LSSD_BUS_NAME ".Bus"
 #define LSSD_DEVICE_IFACE   LSSD_BUS_NAME ".Device"
+
+/* The signals of org.lssd.LSS1.Bus */
+#define LSSD_SIGNAL_DEVICE_FOUND     "DeviceFound"
+#define LSSD_SIGNAL_NODE_ID_ASSIGNED "NodeIdAssigned"
+#define LSSD_SIGNAL_UNKNOWN_DEVICE   "UnknownDevice"
+#define LSSD_SIGNAL_DEVICE_REPLACED  "DeviceReplaced"
+#define LSSD_SIGNAL_JOB_FINISHED     "JobFinished"
 
 /* Device property FoundBy (as): how the last Scan that found the device
  * reached it, any of these */
