@@ -243,6 +243,95 @@ static uint32_t patient_wait(const lss_master *m, const lss_aa_state *s) {
         return (uint32_t) (w < PATIENT_MAX_US ? w : PATIENT_MAX_US);
 }
 
+/* 3. non-configured devices left: fastscan with the map's vendor and
+ * product bits first, then blind while somebody still answers */
+static int enumerate_all(lss_master *m, lss_aa_state *s) {
+        PT_BEGIN(&s->e_pc);
+        for (s->pair = 0; s->pair <= s->plan->n_map; s->pair++) {
+                memset(&m->sc.known, 0, sizeof(m->sc.known));
+                if (s->pair < s->plan->n_map) {
+                        const lss_identity *id = &s->plan->map[s->pair].id;
+                        bool seen = false;
+                        for (size_t j = 0; j < s->pair; j++)
+                                seen |= s->plan->map[j].id.vendor == id->vendor &&
+                                        s->plan->map[j].id.product == id->product;
+                        if (seen)
+                                continue;
+                        m->sc.known.value = *id;
+                        m->sc.known.known_bits[LSS_FIELD_VENDOR] = 32;
+                        m->sc.known.known_bits[LSS_FIELD_PRODUCT] = 32;
+                }
+                for (unsigned id = 0; id < 128; id++)
+                        s->avoid[id] = s->used[id] || s->taken[id];
+                m->sc.avoid = s->avoid;
+                m->sc.keep_stopped = stops(s);
+                m->sc.no_set_aside = s->plan->dry_run;
+                m->sc.pc = m->sc.vpc = 0;
+                PT_CALL(&s->e_pc, proc_enumerate(m, &m->sc));
+                if (m->cancelling)
+                        break;
+                if (m->sc.misbehaving) {
+                        /* nothing more can be found by fastscan: report it, assign nothing of this scan */
+                        aa_enumeration_failed(s, m);
+                        break;
+                }
+                aa_result_reset(m);
+                if (aa_todo_take(s, m->devices, m->n_devices) < 0)
+                        continue;
+                s->given_before = aa_count_given(s);
+                s->i_pc = 0;
+                PT_CALL(&s->e_pc, handle_found(m, s));
+                /* A slave whose fastscan confirmation (or ping) answer came
+                 * after the wait entered configuration state uncounted and
+                 * sat out the rest of that enumeration; the switch to waiting
+                 * at its end freed it. So scan blind again while a blind
+                 * enumeration still gave somebody a node-ID. */
+                if (s->pair == s->plan->n_map && aa_count_given(s) > s->given_before &&
+                    ++s->blind_passes < LSS_NODE_ID_MAX)
+                        s->pair--; /* the loop's ++ comes back to the blind enumeration */
+        }
+        PT_END(&s->e_pc);
+}
+
+
+/* 4. a present device must not be called missing because an answer
+ * came late (a loaded host, a slow device): what the map has and the
+ * pass did not find is looked for again with every step waiting
+ * several times longer, after another NMT Stop where asked */
+static int second_look(lss_master *m, lss_aa_state *s) {
+        PT_BEGIN(&s->l_pc);
+        s->timing = m->timing.cfg;
+        m->stats.patient_wait_us = patient_wait(m, s);
+        m->timing.cfg.timeout_us = m->stats.patient_wait_us;
+        m->timing.cfg.guard_floor_us = m->stats.patient_wait_us / 4;
+        m->timing.cfg.adaptive = false;
+        s->patient = true;
+        if (stops(s)) {
+                STEP_REQUEST(m, &s->l_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
+                m->step = (lss_step) { .kind = STEP_DELAY, .wait_us = 20000 };
+                step_start(m);
+                PT_YIELD(&s->l_pc);
+        }
+        s->d_pc = 0;
+        PT_CALL(&s->l_pc, proc_map_direct(m, s));
+        m->timing.cfg = s->timing;
+        s->patient = false;
+        PT_END(&s->l_pc);
+}
+
+/* 6. the replacement candidates take the place of the found ones */
+static void take_candidates(lss_aa_state *s) {
+        lss_device *t = s->todo;
+        size_t cap = s->cap_todo;
+        s->todo = s->cand;
+        s->n_todo = s->n_cand;
+        s->cap_todo = s->cap_cand;
+        s->cand = t;
+        s->cap_cand = cap;
+        s->n_cand = 0;
+        lss_replace_decide(s->plan, s->out, s->n_out, s->todo, s->n_todo, s->verdict);
+}
+
 static int proc_autoassign(lss_master *m) {
         lss_aa_state *s = m->aa;
         PT_BEGIN(&s->pc);
@@ -274,51 +363,10 @@ static int proc_autoassign(lss_master *m) {
 
         PT_CALL(&s->pc, proc_map_direct(m, s));
 
-        /* 3. non-configured devices left: fastscan with the map's vendor and
-         * product bits first, then blind while somebody still answers */
-        for (s->pair = 0; s->pair <= s->plan->n_map; s->pair++) {
-                memset(&m->sc.known, 0, sizeof(m->sc.known));
-                if (s->pair < s->plan->n_map) {
-                        const lss_identity *id = &s->plan->map[s->pair].id;
-                        bool seen = false;
-                        for (size_t j = 0; j < s->pair; j++)
-                                seen |= s->plan->map[j].id.vendor == id->vendor &&
-                                        s->plan->map[j].id.product == id->product;
-                        if (seen)
-                                continue;
-                        m->sc.known.value = *id;
-                        m->sc.known.known_bits[LSS_FIELD_VENDOR] = 32;
-                        m->sc.known.known_bits[LSS_FIELD_PRODUCT] = 32;
-                }
-                for (unsigned id = 0; id < 128; id++)
-                        s->avoid[id] = s->used[id] || s->taken[id];
-                m->sc.avoid = s->avoid;
-                m->sc.keep_stopped = stops(s);
-                m->sc.no_set_aside = s->plan->dry_run;
-                m->sc.pc = m->sc.vpc = 0;
-                PT_CALL(&s->pc, proc_enumerate(m, &m->sc));
-                if (m->cancelling)
-                        goto out;
-                if (m->sc.misbehaving) {
-                        /* nothing more can be found by fastscan: report it, assign nothing of this scan */
-                        aa_enumeration_failed(s, m);
-                        break;
-                }
-                aa_result_reset(m);
-                if (aa_todo_take(s, m->devices, m->n_devices) < 0)
-                        continue;
-                s->given_before = aa_count_given(s);
-                s->i_pc = 0;
-                PT_CALL(&s->pc, handle_found(m, s));
-                /* A slave whose fastscan confirmation (or ping) answer came
-                 * after the wait entered configuration state uncounted and
-                 * sat out the rest of that enumeration; the switch to waiting
-                 * at its end freed it. So scan blind again while a blind
-                 * enumeration still gave somebody a node-ID. */
-                if (s->pair == s->plan->n_map && aa_count_given(s) > s->given_before &&
-                    ++s->blind_passes < LSS_NODE_ID_MAX)
-                        s->pair--; /* the loop's ++ comes back to the blind enumeration */
-        }
+        s->e_pc = 0;
+        PT_CALL(&s->pc, enumerate_all(m, s));
+        if (m->cancelling)
+                goto out;
 
         if (!s->sdo_read && aa_sdo_wanted(s)) {
                 s->sdo_read = true;
@@ -332,26 +380,11 @@ static int proc_autoassign(lss_master *m) {
         }
 
         /* 4. a present device must not be called missing because an answer
-         * came late (a loaded host, a slow device): what the map has and the
-         * pass did not find is looked for again with every step waiting
-         * several times longer, after another NMT Stop where asked */
+         * came late: what the map has and the pass did not find is looked
+         * for again, patiently */
         if (aa_second_look_entries(s) > 0) {
-                s->timing = m->timing.cfg;
-                m->stats.patient_wait_us = patient_wait(m, s);
-                m->timing.cfg.timeout_us = m->stats.patient_wait_us;
-                m->timing.cfg.guard_floor_us = m->stats.patient_wait_us / 4;
-                m->timing.cfg.adaptive = false;
-                s->patient = true;
-                if (stops(s)) {
-                        STEP_REQUEST(m, &s->pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
-                        m->step = (lss_step) { .kind = STEP_DELAY, .wait_us = 20000 };
-                        step_start(m);
-                        PT_YIELD(&s->pc);
-                }
-                s->d_pc = 0;
-                PT_CALL(&s->pc, proc_map_direct(m, s));
-                m->timing.cfg = s->timing;
-                s->patient = false;
+                s->l_pc = 0;
+                PT_CALL(&s->pc, second_look(m, s));
         }
 
         /* 5. what the map has and the bus has not */
@@ -361,15 +394,7 @@ static int proc_autoassign(lss_master *m) {
         /* 6. the replacement rule (lss_replace.h), now that the pass knows
          * what is missing: the candidates take the place of the found ones */
         if (s->n_cand > 0) {
-                lss_device *t = s->todo;
-                size_t cap = s->cap_todo;
-                s->todo = s->cand;
-                s->n_todo = s->n_cand;
-                s->cap_todo = s->cap_cand;
-                s->cand = t;
-                s->cap_cand = cap;
-                s->n_cand = 0;
-                lss_replace_decide(s->plan, s->out, s->n_out, s->todo, s->n_todo, s->verdict);
+                take_candidates(s);
                 s->deciding = true;
                 s->i_pc = 0;
                 PT_CALL(&s->pc, handle_found(m, s));

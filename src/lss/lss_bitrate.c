@@ -82,86 +82,81 @@ static void progress(lss_master *m, lss_bitrate_state *s, unsigned phase) {
         master_progress(m, ((double) phase + (double) s->i / n) / 3.0);
 }
 
-static int proc_bitrate(lss_master *m) {
-        lss_bitrate_state *s = &m->br;
+/* 1. every device is there, before anything is changed */
+static int reach_all(lss_master *m, lss_bitrate_state *s) {
         char ids[300];
 
-        PT_BEGIN(&s->pc);
-
-        if (s->p.global) {
-                /* 1 and 2 at once, for devices not selectable one by one */
-                s->gpc = 0;
-                PT_CALL(&s->pc, proc_bitrate_global_configure(m, s));
-                if (m->result.status != LSS_OK)
-                        goto revert;
-                goto activate;
-        }
-
-        /* 1. every device is there, before anything is changed */
+        PT_BEGIN(&s->cpc);
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 progress(m, s, 0);
-                SELECT_RETRIED(m, &s->pc, s->attempt, &s->p.devices[s->i].id);
+                SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id);
                 s->p.devices[s->i].outcome = step_answered(m) ? LSS_BITRATE_REACHED : LSS_BITRATE_UNREACHABLE;
                 s->n_bad += !step_answered(m);
-                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         }
         if (s->n_bad > 0) {
                 list_devices(s, LSS_BITRATE_UNREACHABLE, ids, sizeof(ids));
                 master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER,
                                "%zu device%s did not answer at %u bit/s, nothing changed: %s", s->n_bad,
                                s->n_bad == 1 ? "" : "s", s->p.old_bitrate, ids);
-                goto out;
         }
+        PT_END(&s->cpc);
+}
 
-        /* 2. one by one: the new timing, stop at the first refusal */
+/* 2. one by one: the new timing, stop at the first refusal */
+static int configure_each(lss_master *m, lss_bitrate_state *s) {
+        PT_BEGIN(&s->cpc);
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
+                lss_bitrate_device *d = &s->p.devices[s->i];
                 progress(m, s, 1);
-                SELECT_RETRIED(m, &s->pc, s->attempt, &s->p.devices[s->i].id);
+                SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id);
+                d = &s->p.devices[s->i];
                 if (!step_answered(m)) {
-                        s->p.devices[s->i].outcome = LSS_BITRATE_UNREACHABLE;
+                        d->outcome = LSS_BITRATE_UNREACHABLE;
                         master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER,
-                                       "device %08x:%08x:%08x:%08x stopped answering",
-                                    s->p.devices[s->i].id.vendor, s->p.devices[s->i].id.product,
-                                    s->p.devices[s->i].id.revision, s->p.devices[s->i].id.serial);
-                        goto revert;
+                                       "device %08x:%08x:%08x:%08x stopped answering", d->id.vendor, d->id.product,
+                                       d->id.revision, d->id.serial);
+                        goto out;
                 }
-                REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_configure_bit_timing(&f__, 0, s->index),
+                REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_configure_bit_timing(&f__, 0, s->index),
                                 LSS_CS_CONFIGURE_BIT_TIMING);
+                d = &s->p.devices[s->i];
                 if (!step_answered(m)) {
-                        s->p.devices[s->i].outcome = LSS_BITRATE_SILENT;
+                        d->outcome = LSS_BITRATE_SILENT;
                         master_fail_at(m, LSS_E_REJECTED, LSS_SERVICE_CONFIGURE_BIT_TIMING, LSS_REASON_NO_ANSWER,
-                                    "device %08x:%08x:%08x:%08x did not answer Configure Bit Timing (table 0, "
-                                    "index %u): taken as a refusal, nothing activated",
-                                    s->p.devices[s->i].id.vendor, s->p.devices[s->i].id.product,
-                                    s->p.devices[s->i].id.revision, s->p.devices[s->i].id.serial, s->index);
-                        goto revert;
+                                       "device %08x:%08x:%08x:%08x did not answer Configure Bit Timing (table 0, "
+                                       "index %u): taken as a refusal, nothing activated", d->id.vendor,
+                                       d->id.product, d->id.revision, d->id.serial, s->index);
+                        goto out;
                 }
                 if (step_conflict(m)) {
                         master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_CONFIGURE_BIT_TIMING,
                                        LSS_REASON_SEVERAL_ANSWERS,
                                        "more than one slave answered Configure Bit Timing (duplicate identity?)");
-                        goto revert;
+                        goto out;
                 }
-                s->p.devices[s->i].err = m->step.answer.data[1];
-                s->p.devices[s->i].spec = m->step.answer.data[2];
-                if (s->p.devices[s->i].err != 0) {
-                        s->p.devices[s->i].outcome = LSS_BITRATE_REFUSED;
-                        m->result.err = s->p.devices[s->i].err;
-                        m->result.spec = s->p.devices[s->i].spec;
+                d->err = m->step.answer.data[1];
+                d->spec = m->step.answer.data[2];
+                if (d->err != 0) {
+                        d->outcome = LSS_BITRATE_REFUSED;
+                        m->result.err = d->err;
+                        m->result.spec = d->spec;
                         master_fail_at(m, LSS_E_REJECTED, LSS_SERVICE_CONFIGURE_BIT_TIMING, LSS_REASON_REFUSED,
-                                    "device %08x:%08x:%08x:%08x refused %u bit/s (table 0, index %u): error %u, "
-                                    "spec %u; nothing activated",
-                                    s->p.devices[s->i].id.vendor, s->p.devices[s->i].id.product,
-                                    s->p.devices[s->i].id.revision, s->p.devices[s->i].id.serial, s->p.bitrate,
-                                    s->index, m->result.err, m->result.spec);
-                        goto revert;
+                                       "device %08x:%08x:%08x:%08x refused %u bit/s (table 0, index %u): error %u, "
+                                       "spec %u; nothing activated", d->id.vendor, d->id.product, d->id.revision,
+                                       d->id.serial, s->p.bitrate, s->index, m->result.err, m->result.spec);
+                        goto out;
                 }
-                s->p.devices[s->i].outcome = LSS_BITRATE_CONFIGURED;
-                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                d->outcome = LSS_BITRATE_CONFIGURED;
+                SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         }
+out:;
+        PT_END(&s->cpc);
+}
 
-activate:
-        /* 3. everybody at once; from here on the change cannot be taken back */
+/* 3. everybody at once; from here on the change cannot be taken back */
+static int activate(lss_master *m, lss_bitrate_state *s) {
+        PT_BEGIN(&s->cpc);
         s->committed = true;
         m->step = (lss_step) { .kind = STEP_DELAY };
         {
@@ -175,7 +170,7 @@ activate:
          * of the controller before the host interface is taken down */
         m->step.wait_us = (uint32_t) s->p.delay_ms * 250u;
         step_start(m);
-        PT_YIELD(&s->pc);
+        PT_YIELD(&s->cpc);
         /* sent_at was moved to the real write by on_sent */
         s->heard_at = m->step.sent_at + m->step.tx_us;
         if (m->timing.cfg.bitrate != 0)
@@ -186,7 +181,7 @@ activate:
         step_start(m);
         if (m->retune_fn)
                 m->retune_fn(m->retune_ud);
-        PT_YIELD(&s->pc);
+        PT_YIELD(&s->cpc);
         if (s->retune == LSS_RETUNE_WANTED)
                 s->retune = LSS_RETUNE_TIMEOUT;
 
@@ -200,46 +195,52 @@ activate:
                 if (end > m->now) {
                         m->step = (lss_step) { .kind = STEP_DELAY, .wait_us = (uint32_t) (end - m->now) };
                         step_start(m);
-                        PT_YIELD(&s->pc);
+                        PT_YIELD(&s->cpc);
                 }
         }
         s->committed = false;
+        PT_END(&s->cpc);
+}
 
-        /* 4. each device at the new rate */
-        SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+/* 4. each device at the new rate (and stored, when asked) */
+static int verify_each(lss_master *m, lss_bitrate_state *s) {
+        char ids[300];
+
+        PT_BEGIN(&s->cpc);
+        SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         s->n_bad = 0;
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 progress(m, s, 2);
                 if (s->p.devices[s->i].no_select) {
                         /* no selective switch: its SDO server answers at the new rate */
-                        STEP_RETRIED(m, &s->pc, s->attempt, step_node_in_use(m, s->p.devices[s->i].node_id));
+                        STEP_RETRIED(m, &s->cpc, s->attempt, step_node_in_use(m, s->p.devices[s->i].node_id));
                         s->p.devices[s->i].outcome = step_answered(m) ? LSS_BITRATE_SWITCHED : LSS_BITRATE_LOST;
                         s->n_bad += !step_answered(m);
                         continue;
                 }
                 for (s->attempt_conflict = 0;; s->attempt_conflict++) {
-                        SELECT_RETRIED(m, &s->pc, s->attempt, &s->p.devices[s->i].id);
+                        SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id);
                         if (!step_answered(m))
                                 break;
                         /* and a second, different answer: a stray 44 cannot make a device look switched */
-                        REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                        REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                                         LSS_CS_INQUIRE_NODE_ID);
                         if (!step_conflict(m) || s->attempt_conflict >= m->timing.cfg.retries)
                                 break;
                         /* more than one slave still in configuration: the switch
                          * to waiting reached some inside their window; again */
                         m->stats.retries++;
-                        SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                        SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
                 }
                 if (!step_answered(m) || step_conflict(m)) {
                         s->p.devices[s->i].outcome = LSS_BITRATE_LOST;
                         s->n_bad++;
-                        SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                        SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
                         continue;
                 }
                 s->p.devices[s->i].outcome = LSS_BITRATE_SWITCHED;
                 if (s->p.store) {
-                        REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
+                        REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
                         if (step_answered(m) && m->step.answer.data[1] == 0)
                                 s->p.devices[s->i].outcome = LSS_BITRATE_STORED;
                         else {
@@ -248,7 +249,7 @@ activate:
                                 s->p.devices[s->i].spec = step_answered(m) ? m->step.answer.data[2] : 0;
                         }
                 }
-                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         }
         master_progress(m, 1.0);
 
@@ -269,27 +270,62 @@ activate:
                 master_fail_at(m, LSS_E_REJECTED, LSS_SERVICE_STORE, LSS_REASON_REFUSED,
                                "switched to %u bit/s, but Store Configuration failed on: %s", s->p.bitrate, ids);
         }
-        goto out;
+        PT_END(&s->cpc);
+}
 
-revert:
-        /* nothing activated; the devices that accepted go back to the old
-         * timing, or a later Store Configuration would persist the new one */
-        SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+/* Nothing activated; the devices that accepted go back to the old timing,
+ * or a later Store Configuration would persist the new one. */
+static int revert(lss_master *m, lss_bitrate_state *s) {
+        PT_BEGIN(&s->cpc);
+        SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         if (!s->can_revert)
                 goto out;
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 if (s->p.devices[s->i].outcome != LSS_BITRATE_CONFIGURED)
                         continue;
                 step_selective(m, &s->p.devices[s->i].id);
-                PT_YIELD(&s->pc);
+                PT_YIELD(&s->cpc);
                 if (!step_answered(m))
                         continue;
-                STEP_REQUEST(m, &s->pc, lss_encode_configure_bit_timing(&f__, 0, s->old_index),
+                STEP_REQUEST(m, &s->cpc, lss_encode_configure_bit_timing(&f__, 0, s->old_index),
                              LSS_CS_CONFIGURE_BIT_TIMING);
                 if (step_answered(m) && !step_conflict(m) && m->step.answer.data[1] == 0)
                         s->p.devices[s->i].outcome = LSS_BITRATE_REVERTED;
-                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         }
+out:;
+        PT_END(&s->cpc);
+}
+
+/* The phases, each a child; a refusal before the activation reverts. */
+static int proc_bitrate(lss_master *m) {
+        lss_bitrate_state *s = &m->br;
+
+        PT_BEGIN(&s->pc);
+        if (s->p.global) {
+                /* 1 and 2 at once, for devices not selectable one by one */
+                s->gpc = 0;
+                PT_CALL(&s->pc, proc_bitrate_global_configure(m, s));
+                if (m->result.status != LSS_OK)
+                        goto revert;
+        } else {
+                s->cpc = 0;
+                PT_CALL(&s->pc, reach_all(m, s));
+                if (m->result.status != LSS_OK)
+                        goto out;
+                s->cpc = 0;
+                PT_CALL(&s->pc, configure_each(m, s));
+                if (m->result.status != LSS_OK)
+                        goto revert;
+        }
+        s->cpc = 0;
+        PT_CALL(&s->pc, activate(m, s));
+        s->cpc = 0;
+        PT_CALL(&s->pc, verify_each(m, s));
+        goto out;
+revert:
+        s->cpc = 0;
+        PT_CALL(&s->pc, revert(m, s));
 out:;
         PT_END(&s->pc);
 }

@@ -142,7 +142,7 @@ typedef struct lss_scan_state {
 } lss_scan_state;
 
 typedef struct lss_bitrate_state {
-        int pc, gpc;
+        int pc, gpc, cpc;       /* the procedure, the global part, the phase running (a child) */
         lss_bitrate_params p;
         uint8_t index, old_index;
         bool can_revert;
