@@ -153,7 +153,8 @@ static int push_gaps(lss_scan_state *s) {
         const lss_identify_range *r = &s->range;
         uint32_t r1 = r->rev_lo, s1 = r->serial_lo;
         bool before_first = true;
-        qsort(s->cand, s->n_cand, sizeof(*s->cand), by_revision_serial);
+        if (s->n_cand > 1) /* cand is NULL when nobody was found (the whole range again) */
+                qsort(s->cand, s->n_cand, sizeof(*s->cand), by_revision_serial);
         for (size_t i = 0; i <= s->n_cand; i++) {
                 bool end = i == s->n_cand;
                 uint32_t r2 = end ? r->rev_hi : s->cand[i].id.revision;
