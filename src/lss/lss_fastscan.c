@@ -116,8 +116,17 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                         s->found = true;
                         break;
                 }
-                /* keep what was confirmed, unless a kept field just failed */
-                s->confirmed = s->sub < s->confirmed ? 0 : s->sub;
+                /* keep what was confirmed, unless a kept field just failed or a
+                 * guess held: one answer confirms a guess, and with many slaves
+                 * answering the step before, that one may be a late answer of
+                 * theirs (a stall) and no slave has the guess; kept, it would be
+                 * confirmed again the same way each attempt. Scan them. */
+                if (s->guessing) {
+                        s->guessing = false;
+                        s->confirmed = 0;
+                } else {
+                        s->confirmed = s->sub < s->confirmed ? 0 : s->sub;
+                }
         }
 out:;
         PT_END(&s->pc);
