@@ -132,7 +132,12 @@ def run_lssd(mode, n, rep, simulate=False, hog=False):
     who = 'lssd%s%s %s N=%d rep %d' % (' --simulate' if simulate else '', ' (CPU hog)' if hog else '', mode, n, rep)
     with Env({IFNAME: [Slave(*s) for s in slaves]}, config=conf, candump=not simulate, sim_args=sim_args) as env:
         try:
-            return run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who)
+            r = run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who)
+            if os.environ.get('LSSD_BENCH_KEEP_LOGS') == '1' and not simulate:
+                base = os.path.join(bl.results_dir(), 'kept-vcan%s-%s-n%d-rep%d' % ('-hog' if hog else '', mode, n, rep))
+                shutil.copy(env.lssd_log_path, base + '.lssd.log')
+                shutil.copy(env.candump_path, base + '.candump.log')
+            return r
         except bl.BenchFailure:
             # keep what lssd and the candump saw, for the findings
             base = os.path.join(bl.results_dir(), 'failed-%s-%s-n%d-rep%d'
@@ -167,7 +172,8 @@ def run_lssd_in(env, mode, n, rep, simulate, slaves, expected, who):
         stats = {}
     else:
         time.sleep(0.3)  # let candump write the last frames
-        stats = bl.frame_stats(bl.read_candump(env.candump_path, IFNAME, w0 - 0.05, w1 + 0.05))
+        frames = bl.read_candump(env.candump_path, IFNAME, w0 - 0.05, w1 + 0.05)
+        stats = dict(bl.frame_stats(frames), steps=bl.step_times(frames))
         check_reply_and_states(reply, slaves, expected, env.state_dirs[IFNAME], who)
     c.close()
     env.conns.remove(c)

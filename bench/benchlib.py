@@ -119,6 +119,31 @@ def frame_stats(frames):
     return {'frames': len(frames), 'lss_frames': lss, 'bits': bits, 'floor_s': bits / BITRATE}
 
 
+def step_times(frames):
+    """Where an LSS pass's time goes, from a list from read_candump(): each
+    request (0x7E5 frames back to back are one request) up to the next one
+    is a step; answered (0x7E4 first answer: its latency) or silent."""
+    steps = []  # [request time, first answer time or None, next request time]
+    for t, ident, _data, _eff, _rtr in frames:
+        if ident == 0x7E5:
+            if steps and steps[-1][1] is None and t - steps[-1][0] < 0.0003 and steps[-1][2] is None:
+                steps[-1][0] = t  # the next frame of a multi-frame request
+                continue
+            if steps:
+                steps[-1][2] = t
+            steps.append([t, None, None])
+        elif ident == 0x7E4 and steps and steps[-1][1] is None:
+            steps[-1][1] = t
+    done = [s for s in steps if s[2] is not None]
+    answered = [s for s in done if s[1] is not None]
+    silent = [s for s in done if s[1] is None]
+    lat = [(s[1] - s[0]) * 1000 for s in answered]
+    return {'answered': len(answered), 'silent': len(silent),
+            'answered_s': sum(s[2] - s[0] for s in answered), 'silent_s': sum(s[2] - s[0] for s in silent),
+            'latency_ms': {p: percentile(lat, p) for p in (50, 90, 99, 100)} if lat else {},
+            'silent_ms_median': percentile([(s[2] - s[0]) * 1000 for s in silent], 50) if silent else 0.0}
+
+
 # ---- statistics ----
 
 def summary(values):

@@ -106,6 +106,36 @@ def canopen_waits(n, seed):
     return total
 
 
+def where_time_goes(allcases, failures):
+    """Steps from the candump of each VM case's median run (benchlib.step_times)."""
+    rows = []
+    for mode in ORDER:
+        for (impl, m, n), c in sorted(allcases.items()):
+            if impl != 'lssd' or m != mode:
+                continue
+            runs = [r for r in tally(c, '%s %s N=%d' % (impl, mode, n), [])[0] if r.get('steps')]
+            if runs:
+                runs.sort(key=lambda r: r['elapsed_s'])
+                rows.append((mode, n, runs[len(runs) // 2]))
+    if not rows:
+        return
+    print()
+    print('## Where the time goes (vcan0 in the VM; candump of the median run: a step is a request up to the next)')
+    print('%-31s %3s %8s %8s %9s %-27s %7s %8s %9s' % (
+        'case', 'N', 'time s', 'answered', 'answered s', 'latency ms p50/p90/p99/max', 'silent', 'silent s',
+        'silent ms'))
+    for mode, n, r in rows:
+        st = r['steps']
+        lat = st['latency_ms']
+        print('%-31s %3d %8.2f %8d %9.2f  %-26s %7d %8.2f %9.2f' % (
+            LABEL[mode], n, r['elapsed_s'], st['answered'], st['answered_s'],
+            '/'.join('%.1f' % lat[k] for k in ('50', '90', '99', '100')) if lat else '-',
+            st['silent'], st['silent_s'], st['silent_ms_median']))
+    print('# answered s: from each answered request to the next request (latency + the answer guard that lets '
+          'further answers in); silent s: from each unanswered request to the next (the no-answer wait + the late '
+          'guard); silent ms: their median. The waits follow the slowest answers of the last 32 (docs/engine.md)')
+
+
 def main():
     res = bl.load_all()
     print('# lssd benchmarks, %s' % machine())
@@ -152,6 +182,7 @@ def main():
                     LABEL[mode], n, len(runs), fmt_spread(t), t['median'] / n, frames,
                     fmt_spread(cpu, digits=2) if cpu.get('n') else '-',
                     '  + %d WRONG run(s)' % bad if bad else ''))
+    where_time_goes(allcases, failures)
     canopen = [(n, c) for (i, m, n), c in sorted(allcases.items()) if i == 'canopen']
     for n, c in canopen:
         runs = ok_runs(c)
