@@ -226,8 +226,8 @@ static int start_bitrate(lssd_job_env *e, lssd_job *j) {
                 return fail(e, j, LSSD_ERROR_NOT_SUPPORTED, "not-supported",
                             "device%s %s answer%s SDO (1018h) but not the LSS selective switch: %s cannot be "
                             "switched one by one and would be left at the old rate; nothing changed (option "
-                            LSSD_BITRATE_OPTION_GLOBAL "=true switches all devices at once by CiA 305's global "
-                            "procedure, see lssd(8))", n == 1 ? "" : "s", missing, n == 1 ? "s" : "",
+                            LSSD_BITRATE_OPTION_GLOBAL "=true, lssctl set-bitrate --global, switches all devices at "
+                            "once by CiA 305's global procedure, see lssd(8))", n == 1 ? "" : "s", missing, n == 1 ? "s" : "",
                             n == 1 ? "it" : "they");
         k = collect_devices(e, j, missing, sizeof(missing));
         if (k < 0)
@@ -235,8 +235,8 @@ static int start_bitrate(lssd_job_env *e, lssd_job *j) {
         if (missing[0])
                 return fail(e, j, LSSD_ERROR_NOT_FOUND, "not-found",
                             "mapped device%s not found by the scan, and without a revision in the map it "
-                            "cannot be addressed: %s; nothing changed (option skip_missing=true leaves "
-                            "devices the scan does not find out)", strchr(missing, ',') ? "s" : "",
+                            "cannot be addressed: %s; nothing changed (option skip_missing=true, lssctl set-bitrate "
+                            "--skip-missing, leaves devices the scan does not find out)", strchr(missing, ',') ? "s" : "",
                             missing);
         if (j->n_br_devices == 0)
                 return fail(e, j, LSSD_ERROR_NOT_FOUND, "not-found",

@@ -159,7 +159,8 @@ static void scan_notes(lssd_job *j) {
         char text[320];
         if (!j->scan_sdo) {
                 size_t n = (size_t) snprintf(text, sizeof(text), "configured devices of vendor/product pairs "
-                                             "not scanned were not looked for (option sdo = false); scanned:");
+                                             "not scanned were not looked for (option sdo = false, lssctl scan "
+                                             "--no-sdo); scanned:");
                 for (size_t i = 0; i < j->n_pairs && n < sizeof(text); i++)
                         n += (size_t) snprintf(text + n, sizeof(text) - n, " %08x:%08x", j->pairs[i].vendor,
                                                j->pairs[i].product);

@@ -309,6 +309,14 @@ def scenario_arguments(b):
             expect(text in msg, msg)
         name, msg = env.call_error(b.path, BUS_IFACE, 'SetBitrate', 'uqa{sv}', 250000, 16, 1, 'force', 'b', 'true')
         expect_eq(name, 'org.freedesktop.DBus.Error.InvalidArgs', 'unknown option')
+    # a mapped device without revision that the scan does not find cannot be
+    # addressed: refused, naming it and the way on (D-Bus option and lssctl flag)
+    with b.env(GENERIC[:1], devices='{ vendor = 0x9A; product = 3; serial = 0x55; node_id = 9; }') as env:
+        r = b.set_bitrate(env, 250000)
+        expect_eq(r.error_name, ERR + 'NotFound', 'a mapped device without revision is absent: %r' % r)
+        for part in ('00000055', 'cannot be addressed', 'nothing changed', 'skip_missing=true',
+                     'lssctl set-bitrate --skip-missing'):
+            expect(part in r.error_message, '%r not in %r' % (part, r.error_message))
 
 
 def all_scenarios(kind, needs_real=True):

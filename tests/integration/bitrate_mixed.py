@@ -75,7 +75,8 @@ def test_sdo_only():
         name, msg = env.call_error(B0, BUS_IFACE, 'SetBitrate', 'uqa{sv}', 250000, 16, 0)
         expect_eq(name, ERR + 'NotSupported', 'an SDO-only device: ' + msg)
         expect('00006006:00000001:00000001:00000066 at node 60' in msg, 'the device is named: ' + msg)
-        expect('selective switch' in msg and 'nothing changed' in msg and GLOBAL + '=true' in msg, msg)
+        expect('selective switch' in msg and 'nothing changed' in msg and GLOBAL + '=true' in msg and
+               'lssctl set-bitrate --global' in msg, msg)
         expect('not the LSS selective switch' in env.lssd_output(), 'journal line')
         expect_eq(env.get(B0, BUS_IFACE, 'Bitrate'), 125000, 'Bitrate property')
         if env.real:

@@ -266,7 +266,7 @@ def test_scan():
         expect_eq(len(ctl.ok('scan', '--json', '--no-sdo').json), 1, 'scan --no-sdo without a map')
         text = ctl.ok('scan', '--no-sdo').out
         expect('Note: vcan0: configured devices of vendor/product pairs not scanned were not looked for (option '
-               'sdo = false); scanned: none.' in text, 'scan --no-sdo legend: ' + text)
+               'sdo = false, lssctl scan --no-sdo); scanned: none.' in text, 'scan --no-sdo legend: ' + text)
         found = ctl.ok('scan', '--json', '--no-sdo', '--vendor', '0x9A', '--product', '3').json
         expect_eq([d['serial'] for d in found], [17, 0x1276], 'scan --no-sdo --vendor 0x9A --product 3')
         found = ctl.ok('scan', '--json').json

@@ -263,7 +263,7 @@ def test_scan_sdo():
         want = sorted(list(s.identity) + [s.node_id] for s in non_configured + canopennode[1:])
         expect_eq(sorted(found), want, 'Scan with sdo=false')
         # the reply says what it did not look for
-        expect(any('pairs not scanned were not looked for (option sdo = false); scanned: 000000ec:00001234 '
+        expect(any('pairs not scanned were not looked for (option sdo = false, lssctl scan --no-sdo); scanned: 000000ec:00001234 '
                    '0000009a:00000003' in n for n in notes), 'notes of the Scan with sdo=false: %r' % notes)
         for s in non_configured + canopennode[1:]:
             expect_eq(env.get(dev('vcan0', s), DEVICE_IFACE, 'FoundBy'), ['lss'], 'FoundBy of %x' % s.serial)
