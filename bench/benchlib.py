@@ -126,7 +126,7 @@ def step_times(frames):
     steps = []  # [request time, first answer time or None, next request time]
     for t, ident, _data, _eff, _rtr in frames:
         if ident == 0x7E5:
-            if steps and steps[-1][1] is None and t - steps[-1][0] < 0.0003 and steps[-1][2] is None:
+            if steps and steps[-1][1] is None and t - steps[-1][0] < 0.0003:
                 steps[-1][0] = t  # the next frame of a multi-frame request
                 continue
             if steps:

@@ -34,6 +34,15 @@ typedef struct row {
         uint64_t lss_frames, all_frames, busy_us, elapsed_us;
 } row;
 
+/* A host that stalls now and then, for trials of the timing rules:
+ * ENGINE_BENCH_STALL_PPM answers per million come ENGINE_BENCH_STALL_US late
+ * (default none: the tables below are without). */
+static void stalls(lss_slave_faults *f) {
+        const char *ppm = getenv("ENGINE_BENCH_STALL_PPM"), *us = getenv("ENGINE_BENCH_STALL_US");
+        f->spike_ppm = ppm ? (uint32_t) strtoul(ppm, NULL, 10) : 0;
+        f->spike_us = us ? (uint32_t) strtoul(us, NULL, 10) : 8000;
+}
+
 static int run_case(enum mode mode, size_t n, uint64_t seed, row *out) {
         const size_t n_slaves = n;
         membus *b = membus_new(BITRATE);
@@ -43,6 +52,7 @@ static int run_case(enum mode mode, size_t n, uint64_t seed, row *out) {
         lss_slave_faults_default(&f);
         f.latency_us = LATENCY_US;
         f.jitter_us = JITTER_US;
+        stalls(&f);
         lss_identity *ids = calloc(n, sizeof(*ids));
         for (size_t i = 0; i < n_slaves; i++) {
                 ids[i] = (lss_identity) { 0xEC, 0x1234, (uint32_t) sim_random_next(&seed), (uint32_t) sim_random_next(&seed) };
@@ -182,6 +192,12 @@ int main(void) {
 
         printf("# engine on the in-memory bus: %u bit/s, slave latency %u us + jitter 0..%u us\n", BITRATE,
                LATENCY_US, JITTER_US);
+        lss_slave_faults st;
+        lss_slave_faults_default(&st);
+        stalls(&st);
+        if (st.spike_ppm)
+                printf("# stalls: %u of a million answers %u us late (not in the SDO rows)\n", st.spike_ppm,
+                       st.spike_us);
         printf("# floor (c) = 10 LSS frames per node; floor (a) = bus floor of a 133-step fastscan = %.1f ms\n",
                fastscan_floor_us / 1000);
         printf("%-26s %4s %10s %10s %12s %12s %10s %10s\n", "case", "N", "LSS frames", "frames/N", "bus time ms",

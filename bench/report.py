@@ -106,7 +106,7 @@ def canopen_waits(n, seed):
     return total
 
 
-def where_time_goes(allcases, failures):
+def where_time_goes(allcases):
     """Steps from the candump of each VM case's median run (benchlib.step_times)."""
     rows = []
     for mode in ORDER:
@@ -182,7 +182,7 @@ def main():
                     LABEL[mode], n, len(runs), fmt_spread(t), t['median'] / n, frames,
                     fmt_spread(cpu, digits=2) if cpu.get('n') else '-',
                     '  + %d WRONG run(s)' % bad if bad else ''))
-    where_time_goes(allcases, failures)
+    where_time_goes(allcases)
     canopen = [(n, c) for (i, m, n), c in sorted(allcases.items()) if i == 'canopen']
     for n, c in canopen:
         runs = ok_runs(c)
