@@ -18,8 +18,8 @@
  * At the end, also on failure or cancel, every slave set aside gets 255
  * back and NMT Reset Communication on T, and every one is verified by
  * selective switch and Inquire Node-ID.
- * Bounds: LSS_ENUMERATE_MAX_FINDS finds, cfg.retries failed rounds in a row,
- * a deadline; a slave found again after it was set aside, one that confirms
+ * Bounds: rounds that find nobody new at most as many as the finds plus a
+ * margin (rounds_exhausted), cfg.retries failed rounds in a row, a deadline; a slave found again after it was set aside, one that confirms
  * an identity other than the one found, or a phantom found twice ends the
  * pass with LSS_E_CONFLICT naming it (result.id). */
 #include <inttypes.h>
@@ -396,6 +396,18 @@ out:;
         PT_END(&s->hpc);
 }
 
+/* A round finds one slave or nobody new (a stall, a lost frame, an unclear
+ * confirmation: a retry). A full bus on a host that stalls now and then
+ * loses more rounds than a fixed margin over 127 finds, so the bound is on
+ * the rounds that found nobody: no more of them than finds, plus a margin
+ * (cfg.retries failed in a row end the pass earlier); and twice the finds a
+ * bus can hold in all. */
+static bool rounds_exhausted(const lss_master *m, const lss_scan_state *s) {
+        unsigned margin = 2u * (m->timing.cfg.retries + 1u);
+        unsigned finds = (unsigned) s->n_cand;
+        return s->rounds - finds >= finds + margin || s->rounds >= 2u * LSS_ENUMERATE_MAX_FINDS + margin;
+}
+
 int proc_enumerate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
@@ -413,11 +425,13 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                 /* nobody left in configuration from before */
                 SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
                 while (!m->cancelling) {
-                        if (s->rounds++ >= LSS_ENUMERATE_MAX_FINDS + 2u * (m->timing.cfg.retries + 1u)) {
-                                master_fail(m, LSS_E_INCOMPLETE, "the enumeration stopped at its bound of %u "
-                                            "fastscan rounds (%zu slaves found)", s->rounds - 1, s->n_cand);
+                        if (rounds_exhausted(m, s)) {
+                                master_fail(m, LSS_E_INCOMPLETE, "the enumeration stopped: %u of its %u fastscan "
+                                            "rounds found nobody new (%zu slaves found)",
+                                            s->rounds - (unsigned) s->n_cand, s->rounds, s->n_cand);
                                 break;
                         }
+                        s->rounds++;
                         if (m->now >= s->deadline) {
                                 master_fail(m, LSS_E_INCOMPLETE, "the enumeration stopped at its deadline of %" PRIu64
                                             " s (%zu slaves found)", lss_enumerate_deadline_us(&m->timing.cfg) / 1000000u,

@@ -240,8 +240,8 @@ int lss_master_nmt(lss_master *m, enum nmt_cs cs, uint8_t node_id, uint64_t now)
  * top of the range that no device answers to (slaves such as CANopenNode's
  * keep answering Fastscan in configuration state); at the end, also on
  * failure or cancel, each gets 255 back, NMT Reset Communication, and is
- * verified by inquiry (result devices[].aside_node_id). The pass ends after
- * at most LSS_ENUMERATE_MAX_FINDS finds plus a margin of failed rounds, or
+ * verified by inquiry (result devices[].aside_node_id). The pass ends when
+ * more rounds found nobody new than found a slave (plus a margin), or
  * at its deadline (lss_enumerate_deadline_us), and a slave that answers for
  * identities not its own (found twice, or confirming another identity) ends
  * it with LSS_E_CONFLICT naming it (result.id). */
