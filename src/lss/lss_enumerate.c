@@ -134,7 +134,7 @@ static int set_aside(lss_master *m, lss_scan_state *s) {
                         break;
                 /* the next few candidates from the top down, probed together */
                 s->probe = (lss_probe_state) { .taken = s->temp_taken, .free = s->temp_free };
-                for (int id = s->next_temp; id >= (int) LSS_NODE_ID_MIN && s->probe.n_ids < LSS_MAX_TX; id--)
+                for (int id = s->next_temp; id >= (int) LSS_NODE_ID_MIN && s->probe.n_ids < LSS_FEW_TX; id--)
                         if (!(s->avoid && s->avoid[id]) && !s->temp_taken[id])
                                 s->probe.ids[s->probe.n_ids++] = (uint8_t) id;
                 PT_CALL(&s->apc, proc_probe(m, &s->probe));
@@ -200,7 +200,7 @@ static int give_back(lss_master *m, lss_scan_state *s) {
                 /* the resets, a few frames a step (the transmit queue is short) */
                 for (s->i = 0; s->n_aside > 0 && s->i < s->n_cand;) {
                         m->step = (lss_step) { .kind = STEP_DELAY };
-                        for (; s->i < s->n_cand && m->step.n_tx < LSS_MAX_TX - 1; s->i++)
+                        for (; s->i < s->n_cand && m->step.n_tx < LSS_FEW_TX - 1; s->i++)
                                 if (back_due(s, &s->cand[s->i]))
                                         add_nmt(m, NMT_CS_RESET_COMMUNICATION, s->cand[s->i].aside_node_id);
                         if (s->i == s->n_cand) {

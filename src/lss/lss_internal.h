@@ -17,7 +17,14 @@ enum { PT_WAITING = 0, PT_DONE = 1 };
         do { *(pc) = __LINE__; __attribute__((fallthrough)); case __LINE__: \
                 if ((child) == PT_WAITING) return PT_WAITING; } while (0)
 
-#define LSS_MAX_TX 6
+/* Frames of one step: a probe batch (lss_probe.c) is the largest. */
+#define LSS_MAX_TX 16
+/* The engine's transmit queue: a full step and what was queued before it
+ * (an unconfirmed switch, NMT frames) */
+#define LSS_TXQ_LEN (2 * LSS_MAX_TX)
+/* Frames the procedures hand out together when nothing waits for them:
+ * an interface's transmit queue is short (10 frames by default) */
+#define LSS_FEW_TX 6
 
 enum step_kind {
         STEP_LSS,    /* LSS request(s), answered by expect_cs or unconfirmed */
@@ -50,6 +57,7 @@ typedef struct lss_step {
         bool needs_echo;       /* tx confirmation was on when the step began */
         bool written;          /* on_sent() came: the request was handed to the transport */
         bool confirmed;        /* tx confirmation: the echo of the last request came back */
+        uint32_t sdo_answered; /* STEP_SDO: bit i: the node-ID of tx[i] answered */
 } lss_step;
 
 /* Which of a list of node-IDs answer an SDO upload (proc_probe). */
@@ -189,7 +197,7 @@ struct lss_master {
         struct lss_sdo_state *sdo;
         lss_bitrate_state br;
 
-        lss_frame txq[16];
+        lss_frame txq[LSS_TXQ_LEN];
         unsigned txq_head, txq_len;
 
         lss_result result;
@@ -226,7 +234,8 @@ void step_on_tx_confirmed(lss_master *m, uint64_t at);
 void step_selective(lss_master *m, const lss_identity *id);
 /* SDO upload of 0x1000 to node_id: answered means the node-ID is taken. */
 void step_node_in_use(lss_master *m, uint8_t node_id);
-/* The same to up to LSS_MAX_TX node-IDs at once: one wait for all of them. */
+/* The same to up to LSS_MAX_TX node-IDs at once: one wait for all of them,
+ * ended early once every one answered (step.sdo_answered says who did). */
 void step_nodes_in_use(lss_master *m, const uint8_t *ids, unsigned n);
 void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx);
 void step_on_stray(lss_master *m, const lss_frame *f);

@@ -783,7 +783,7 @@ bool lss_master_next_tx(lss_master *m, lss_frame *f) {
         if (m->txq_len == 0)
                 return false;
         *f = m->txq[m->txq_head];
-        m->txq_head = (m->txq_head + 1) % 16;
+        m->txq_head = (m->txq_head + 1) % LSS_TXQ_LEN;
         m->txq_len--;
         m->wire_until = (m->wire_until > m->now ? m->wire_until : m->now) + lss_timing_frame_us(&m->timing, f);
         return true;

@@ -3,8 +3,9 @@
  * type, every CANopen device has it) to each, up to LSS_MAX_TX at once with
  * one wait for all of them: the wait is the full configured one (a slow
  * device must not pass for absent), so probing one at a time cost that
- * wait per node-ID. The step ends at the first answer, so after a batch
- * somebody answered each node-ID of it is asked again on its own. */
+ * wait per node-ID. The step ends early once every node-ID asked has
+ * answered (a plant at boot: all of them), otherwise when the wait runs
+ * out; either way it says who answered. */
 #include "lss/lss_internal.h"
 
 int proc_probe(lss_master *m, lss_probe_state *s) {
@@ -13,18 +14,10 @@ int proc_probe(lss_master *m, lss_probe_state *s) {
                 s->n_batch = s->n_ids - s->i < LSS_MAX_TX ? s->n_ids - s->i : LSS_MAX_TX;
                 step_nodes_in_use(m, s->ids + s->i, s->n_batch);
                 PT_YIELD(&s->pc);
-                if (m->step.n_answers == 0 || s->n_batch == 1) {
-                        for (s->k = 0; s->k < s->n_batch; s->k++) {
-                                s->taken[s->ids[s->i + s->k]] = m->step.n_answers > 0;
-                                s->free[s->ids[s->i + s->k]] = m->step.n_answers == 0;
-                        }
-                        continue;
-                }
                 for (s->k = 0; s->k < s->n_batch; s->k++) {
-                        step_node_in_use(m, s->ids[s->i + s->k]);
-                        PT_YIELD(&s->pc);
-                        s->taken[s->ids[s->i + s->k]] = m->step.n_answers > 0;
-                        s->free[s->ids[s->i + s->k]] = m->step.n_answers == 0;
+                        bool answered = m->step.sdo_answered & (1u << s->k);
+                        s->taken[s->ids[s->i + s->k]] = answered;
+                        s->free[s->ids[s->i + s->k]] = !answered;
                 }
         }
         PT_END(&s->pc);

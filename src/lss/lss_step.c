@@ -48,7 +48,7 @@ void step_node_in_use(lss_master *m, uint8_t node_id) {
 bool step_queue_tx(lss_master *m, const lss_frame *f) {
         if (m->txq_len >= sizeof(m->txq) / sizeof(m->txq[0]))
                 return false;
-        m->txq[(m->txq_head + m->txq_len) % 16] = *f;
+        m->txq[(m->txq_head + m->txq_len) % LSS_TXQ_LEN] = *f;
         m->txq_len++;
         return true;
 }
@@ -73,7 +73,7 @@ void step_start(lss_master *m) {
         if (m->wire_until > m->now)
                 s->tx_us += m->wire_until - m->now;
         for (unsigned i = 0; i < m->txq_len; i++)
-                s->tx_us += lss_timing_frame_us(&m->timing, &m->txq[(m->txq_head + i) % 16]);
+                s->tx_us += lss_timing_frame_us(&m->timing, &m->txq[(m->txq_head + i) % LSS_TXQ_LEN]);
         s->sent_at = m->now;
         if (s->kind == STEP_LSS && s->expect_cs >= 0)
                 m->asked_at[s->expect_cs & 0xFF] = m->now + 1;
@@ -101,19 +101,28 @@ void step_on_tx_confirmed(lss_master *m, uint64_t at) {
         s->phase = PHASE_WAIT;
 }
 
+/* STEP_SDO: the bit of the node-ID asked that f answers for, 0: none */
+static uint32_t sdo_bit(const lss_step *s, const lss_frame *f) {
+        for (unsigned i = 0; i < s->n_tx; i++)
+                if (f->id == s->tx[i].id - 0x80u && f->len == 8 && f->flags == 0)
+                        return 1u << i;
+        return 0;
+}
+
 static bool step_matches(const lss_step *s, const lss_frame *f) {
         if (s->kind == STEP_BOOTUP) {
                 uint8_t node, state;
                 return bootup_decode(f, &node, &state) && node == s->bootup_node && state == 0;
         }
-        if (s->kind == STEP_SDO) {
-                /* an answer of a node-ID asked */
-                for (unsigned i = 0; i < s->n_tx; i++)
-                        if (f->id == s->tx[i].id - 0x80u && f->len == 8 && f->flags == 0)
-                                return true;
-                return false;
-        }
+        if (s->kind == STEP_SDO)
+                return sdo_bit(s, f) != 0;
         return s->kind == STEP_LSS && lss_is_response(f) && f->data[0] == (uint8_t) s->expect_cs;
+}
+
+/* An SDO step asks several node-IDs and waits for all of them: it ends
+ * early only when every one has answered. */
+static bool step_all_in(const lss_step *s) {
+        return s->kind != STEP_SDO || s->sdo_answered == (s->n_tx >= 32 ? UINT32_MAX : (1u << s->n_tx) - 1);
 }
 
 /* Could f be the late answer of a step of ours? Only if a step waited for
@@ -174,6 +183,8 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                 step_on_stray(m, f);
                 return;
         }
+        if (s->kind == STEP_SDO)
+                s->sdo_answered |= sdo_bit(s, f);
         if (s->n_answers == 0) {
                 /* the first answer decides the step: its latency is what the wait is for */
                 /* (an rx time may read a little before the echo's: count 0) */
@@ -191,13 +202,23 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                         s->late = true;
                         m->stats.late_answers++;
                 }
-                s->phase = PHASE_ANSWER_GUARD;
-                s->end_at = rx + lss_timing_answer_guard(&m->timing);
+                if (step_all_in(s)) {
+                        s->phase = PHASE_ANSWER_GUARD;
+                        s->end_at = rx + lss_timing_answer_guard(&m->timing);
+                }
                 return;
         }
         /* more answers queue behind each other on the wire: wait until the
          * last one is in, so none of them leaks into the next step */
-        s->end_at = rx + lss_timing_answer_guard(&m->timing);
+        if (s->phase == PHASE_WAIT && step_all_in(s)) {
+                s->phase = PHASE_ANSWER_GUARD;
+                s->end_at = 0;
+        }
+        if (s->phase != PHASE_WAIT) {
+                uint64_t e = rx + lss_timing_answer_guard(&m->timing);
+                if (e > s->end_at)
+                        s->end_at = e;
+        }
         s->n_frames++;
         /* two boot-ups of one node-ID: two devices took it (duplicate identity) */
         if (s->kind == STEP_BOOTUP || memcmp(s->answer.data, f->data, 8) != 0) {

@@ -271,6 +271,54 @@ START_TEST(probes_together) {
 }
 END_TEST
 
+/* A plant at boot: 14 of 16 mapped devices already at their node-IDs, two
+ * missing. Every mapped node-ID is asked once, all of them in one step: the
+ * step waits for every node-ID it asked (a silent one costs the one wait),
+ * not for the first answer and then each node-ID again on its own. */
+typedef struct probe_count {
+        unsigned before_lss, per_node[128];
+        bool lss_seen;
+} probe_count;
+
+static void count_probes(void *ud, const lss_frame *f, uint64_t t) {
+        probe_count *c = ud;
+        (void) t;
+        if (f->id == LSS_COB_MASTER)
+                c->lss_seen = true;
+        if (!c->lss_seen && f->id >= 0x601 && f->id <= 0x67F) {
+                c->before_lss++;
+                c->per_node[f->id - 0x600]++;
+        }
+}
+
+START_TEST(probe_asks_each_node_id_once) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(1000, 300);
+        lss_map_entry map[16];
+        for (unsigned i = 0; i < 16; i++) {
+                lss_identity id = { 0x9A, 3, 1, 0x700 + i };
+                uint8_t node = (uint8_t) (10 + i);
+                if (node != 12 && node != 20)
+                        membus_add_slave(b, &id, node, &f);
+                map[i] = (lss_map_entry) { .id = id, .revision_known = true, .node_id = node };
+        }
+        probe_count c = { 0 };
+        membus_set_trace(b, count_probes, &c);
+        lss_autoassign_plan p = { .map = map, .n_map = 16, .store = true };
+        lss_master *m = master_default();
+        ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+        for (unsigned i = 0; i < 16; i++) {
+                bool absent = map[i].node_id == 12 || map[i].node_id == 20;
+                expect_outcome(m, &map[i].id, absent ? LSS_OUTCOME_MISSING : LSS_OUTCOME_UNCHANGED);
+                ck_assert_msg(c.per_node[map[i].node_id] == 1, "node-ID %u asked %u times before LSS",
+                              map[i].node_id, c.per_node[map[i].node_id]);
+        }
+        ck_assert_uint_eq(c.before_lss, 16);
+        ck_assert(all_waiting(b));
+        pass_free(m, b);
+}
+END_TEST
+
 /* A device found by a scan (a map entry without revision: the revision
  * bisection finds it) and then silent to the selective switch (its answer
  * late under load) is looked for again on the second look, not reported
@@ -586,6 +634,7 @@ int main(void) {
         tcase_add_test(tc, interrupted_pass_is_stored);
         tcase_add_test(tc, slow_devices_are_all_found);
         tcase_add_test(tc, probes_together);
+        tcase_add_test(tc, probe_asks_each_node_id_once);
         tcase_add_test(tc, found_then_silent_is_looked_for_again);
         tcase_add_test(tc, store_lost_is_stored_on_second_look);
         suite_add_tcase(s, tc);
