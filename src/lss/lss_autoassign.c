@@ -270,6 +270,11 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
                 PT_CALL(&s->e_pc, proc_enumerate(m, &m->sc));
                 if (m->cancelling)
                         break;
+                /* Every non-configured slave answers the ping, whatever its
+                 * identity: when nobody did, the enumerations left (other
+                 * vendors, blind) would only ask it again, a full wait each. */
+                if (m->sc.nobody)
+                        break;
                 if (m->sc.misbehaving) {
                         /* nothing more can be found by fastscan: report it, assign nothing of this scan */
                         aa_enumeration_failed(s, m);

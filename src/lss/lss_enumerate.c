@@ -411,7 +411,7 @@ static bool rounds_exhausted(const lss_master *m, const lss_scan_state *s) {
 int proc_enumerate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
-        s->misbehaving = false;
+        s->misbehaving = s->nobody = false;
         for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
                 s->n_cand = s->n_aside = s->n_kept = 0;
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
@@ -456,8 +456,10 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         if (s->fs.none) {
                                 /* (a pass that found nobody, e.g. the map's devices
                                  * all handled, asks once, as an empty bus costs) */
-                                if (s->looks++ >= (s->n_cand > 0 ? m->timing.cfg.retries : 0))
+                                if (s->looks++ >= (s->n_cand > 0 ? m->timing.cfg.retries : 0)) {
+                                        s->nobody = s->n_cand == 0 && s->fs.silent;
                                         break;
+                                }
                                 /* Silence may be a slave that lost the ping (a frame lost
                                  * costs a retry, not a slave) or one whose fastscan
                                  * confirmation was answered after its step ended, now in

@@ -22,7 +22,7 @@ static uint32_t known_prefix(const lss_fastscan_known *k, unsigned sub) {
 
 int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         PT_BEGIN(&s->pc);
-        s->found = s->none = false;
+        s->found = s->none = s->silent = false;
         s->guessing = s->n_guess > 0;
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {
                 step_lss(m, LSS_CS_IDENTIFY_SLAVE);
@@ -37,7 +37,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                 if (m->step.void_)
                         continue;
                 if (!step_answered(m)) {
-                        s->none = true;
+                        s->none = s->silent = true;
                         break;
                 }
                 for (s->sub = 0; s->sub < LSS_FIELD_COUNT; s->sub++) {

@@ -78,6 +78,7 @@ typedef struct lss_fastscan_state {
         unsigned sub, attempt, field_try, confirmed; /* fields [0, confirmed) confirmed earlier */
         int bit;
         bool found, none;          /* outcome: one slave in configuration / nobody there */
+        bool silent;               /* none because nobody answered the ping: no slave is non-configured */
 } lss_fastscan_state;
 
 typedef struct lss_assign_state {
@@ -126,6 +127,7 @@ typedef struct lss_scan_state {
         unsigned gb_try;
         bool selected;          /* this round confirmed by a selective switch (all went to waiting first) */
         bool misbehaving;       /* the pass ended on a slave that does not follow CiA 305 (result.id) */
+        bool nobody;            /* the pass found nobody and its ping was silent: no slave is non-configured */
         uint64_t deadline;
         lss_identity found, other, phantom;
         lss_identity other_before;  /* the last slave that confirmed another identity than found */

@@ -319,6 +319,39 @@ START_TEST(probe_asks_each_node_id_once) {
 }
 END_TEST
 
+/* Every non-configured slave answers the fastscan ping, whatever its
+ * identity. With the map's devices all handled, the enumerations for
+ * unknown devices (one per vendor and product of the map, then a blind one)
+ * ask nothing new after a silent ping: one ping, one wait, not one each. */
+static void count_pings(void *ud, const lss_frame *f, uint64_t t) {
+        (void) t;
+        if (lss_is_request(f) && f->data[0] == LSS_CS_FASTSCAN && f->data[5] == LSS_FASTSCAN_PING)
+                ++*(unsigned *) ud;
+}
+
+START_TEST(one_ping_when_nobody_is_left) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(1000, 300);
+        lss_map_entry map[3];
+        for (unsigned i = 0; i < 3; i++) {
+                lss_identity id = { 0x9A, 3 + i, 1, 0x600 + i };
+                membus_add_slave(b, &id, 0xFF, &f);
+                map[i] = (lss_map_entry) { .id = id, .revision_known = true, .node_id = (uint8_t) (10 + i) };
+        }
+        unsigned pings = 0;
+        membus_set_trace(b, count_pings, &pings);
+        lss_autoassign_plan p = { .map = map, .n_map = 3, .store = true, .unknown = LSS_UNKNOWN_POOL,
+                                  .pool_lo = 40, .pool_hi = 50 };
+        lss_master *m = master_default();
+        ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+        for (unsigned i = 0; i < 3; i++)
+                expect_outcome(m, &map[i].id, LSS_OUTCOME_ASSIGNED);
+        ck_assert_uint_eq(pings, 1);
+        ck_assert(all_waiting(b));
+        pass_free(m, b);
+}
+END_TEST
+
 /* A device found by a scan (a map entry without revision: the revision
  * bisection finds it) and then silent to the selective switch (its answer
  * late under load) is looked for again on the second look, not reported
@@ -635,6 +668,7 @@ int main(void) {
         tcase_add_test(tc, slow_devices_are_all_found);
         tcase_add_test(tc, probes_together);
         tcase_add_test(tc, probe_asks_each_node_id_once);
+        tcase_add_test(tc, one_ping_when_nobody_is_left);
         tcase_add_test(tc, found_then_silent_is_looked_for_again);
         tcase_add_test(tc, store_lost_is_stored_on_second_look);
         suite_add_tcase(s, tc);
