@@ -48,6 +48,9 @@ typedef struct lss_step {
 
         enum step_phase phase;
         uint64_t sent_at, tx_us, first_at, end_at;
+        uint64_t busy_us;      /* without tx confirmation: the wire may carry answers
+                                * of the step before ahead of this request (they win
+                                * arbitration) this long; the wait starts after */
         unsigned n_answers;    /* distinct answers (identical ones count once) */
         unsigned n_frames;     /* every matching answer, identical ones too */
         lss_frame answer;      /* the first */
@@ -200,6 +203,8 @@ struct lss_master {
         lss_bitrate_state br;
 
         lss_frame txq[LSS_TXQ_LEN];
+        lss_frame final_answer;   /* the last answer that ended its step at once (a selective switch's) */
+        uint64_t answers_until;   /* further answers to that step may be on the wire until then */
         unsigned txq_head, txq_len;
 
         lss_result result;

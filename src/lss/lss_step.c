@@ -74,6 +74,8 @@ void step_start(lss_master *m) {
                 s->tx_us += m->wire_until - m->now;
         for (unsigned i = 0; i < m->txq_len; i++)
                 s->tx_us += lss_timing_frame_us(&m->timing, &m->txq[(m->txq_head + i) % LSS_TXQ_LEN]);
+        if (m->answers_until > m->now)
+                s->busy_us = m->answers_until - m->now;
         s->sent_at = m->now;
         if (s->kind == STEP_LSS && s->expect_cs >= 0)
                 m->asked_at[s->expect_cs & 0xFF] = m->now + 1;
@@ -97,7 +99,7 @@ void step_on_tx_confirmed(lss_master *m, uint64_t at) {
         /* the request is on the wire from now: the wait starts here, also
          * when a busy bus held it back past the estimated deadline */
         s->sent_at = at;
-        s->tx_us = 0;
+        s->tx_us = s->busy_us = 0;
         s->phase = PHASE_WAIT;
 }
 
@@ -117,6 +119,14 @@ static bool step_matches(const lss_step *s, const lss_frame *f) {
         if (s->kind == STEP_SDO)
                 return sdo_bit(s, f) != 0;
         return s->kind == STEP_LSS && lss_is_response(f) && f->data[0] == (uint8_t) s->expect_cs;
+}
+
+/* A selective switch's answer says nothing but "here" (cs 0x44, the rest
+ * reserved): a second slave's would be the same frame and count once, so
+ * nothing can come after the first that changes the step, and it ends there
+ * (no answer guard). Such a duplicate arriving later is no late answer. */
+static bool answer_is_final(const lss_step *s) {
+        return s->kind == STEP_LSS && s->expect_cs == LSS_CS_SWITCH_SEL_RESPONSE;
 }
 
 /* An SDO step asks several node-IDs and waits for all of them: it ends
@@ -140,6 +150,10 @@ static bool asked_lately(const lss_master *m, const lss_frame *f) {
  * step: the slaves or the host are slower than the waits. */
 void step_on_stray(lss_master *m, const lss_frame *f) {
         if (!lss_is_response(f) || !asked_lately(m, f))
+                return;
+        /* the same "here" again, in the time the skipped answer guard would
+         * have taken it: another slave's or a duplicate, not a late answer */
+        if (m->now <= m->answers_until && memcmp(f->data, m->final_answer.data, 8) == 0)
                 return;
         m->stats.stray_answers++;
         lss_timing_on_stray(&m->timing);
@@ -202,7 +216,15 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                         s->late = true;
                         m->stats.late_answers++;
                 }
-                if (step_all_in(s)) {
+                if (answer_is_final(s)) {
+                        /* Further identical answers may still take the wire
+                         * ahead of the next request (answers win arbitration):
+                         * without tx confirmation that request's wait counts
+                         * from when they would be off it. */
+                        m->answers_until = rx + lss_timing_answer_guard(&m->timing);
+                        m->final_answer = *f;
+                        s->phase = PHASE_DONE;
+                } else if (step_all_in(s)) {
                         s->phase = PHASE_ANSWER_GUARD;
                         s->end_at = rx + lss_timing_answer_guard(&m->timing);
                 }
@@ -237,7 +259,7 @@ uint64_t step_deadline(const lss_master *m) {
         switch (s->phase) {
         case PHASE_WAIT:
                 if (s->kind == STEP_LSS || s->kind == STEP_SDO)
-                        return s->sent_at + s->tx_us + lss_timing_wait(&m->timing, s->discovery);
+                        return s->sent_at + s->tx_us + s->busy_us + lss_timing_wait(&m->timing, s->discovery);
                 return s->sent_at + s->tx_us + s->wait_us;
         case PHASE_ANSWER_GUARD:
         case PHASE_LATE_GUARD:

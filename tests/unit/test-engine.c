@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* Raw services, error codes, strict acceptance, timing rules. */
+#include <inttypes.h>
+
 #include "engine-util.h"
 #include "lss/lss_timing.h"
 
@@ -281,6 +283,50 @@ START_TEST(duplicate_answers_count_once) {
         ck_assert_uint_eq(r->node_id, 0x22);
         lss_master_free(m);
         membus_free(b);
+}
+END_TEST
+
+/* A selective switch's answer says nothing but "here": a second slave's is
+ * the same frame and counts once, so the step ends at the first answer and
+ * the next request goes out at once (no answer guard); a duplicate that
+ * comes after it is known as such, not taken for a late answer. */
+typedef struct after_select {
+        uint64_t at_answer, next_request;
+} after_select;
+
+static void time_after_select(void *ud, const lss_frame *f, uint64_t t) {
+        after_select *a = ud;
+        if (lss_is_response(f) && f->data[0] == LSS_CS_SWITCH_SEL_RESPONSE && !a->at_answer)
+                a->at_answer = t;
+        else if (lss_is_request(f) && a->at_answer && !a->next_request)
+                a->next_request = t;
+}
+
+START_TEST(selective_switch_ends_at_its_answer) {
+        for (int dup = 0; dup <= 1; dup++) {
+                lss_slave_faults f;
+                lss_slave_faults_default(&f);
+                f.duplicate_answers = dup;
+                membus *b = one_slave(0xFF, &f);
+                after_select a = { 0 };
+                membus_set_trace(b, time_after_select, &a);
+                lss_master *m = master_default();
+                ck_assert_int_eq(lss_master_assign(m, &ID1, 0x21, LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY,
+                                                   membus_now(b)), 0);
+                ck_assert_int_eq(run(m, b)->status, LSS_OK);
+                ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 0x21);
+                if (!dup) {
+                        /* the next request's own frame time (<= 135 bits at 125 kbit/s), nothing before it */
+                        ck_assert_msg(a.next_request - a.at_answer <= 1080, "next request %" PRIu64 " us after the answer",
+                                      a.next_request - a.at_answer);
+                }
+                /* the duplicate took the wire before the next request: no retry, no stray, no patience */
+                ck_assert_uint_eq(lss_master_get_stats(m)->retries, 0);
+                ck_assert_uint_eq(lss_master_get_stats(m)->stray_answers, 0);
+                ck_assert_uint_eq(lss_master_get_stats(m)->patience_us, 0);
+                lss_master_free(m);
+                membus_free(b);
+        }
 }
 END_TEST
 
@@ -652,6 +698,7 @@ int main(void) {
         tcase_add_test(tc, no_answer_is_never_success);
         tcase_add_test(tc, two_in_configuration_conflict);
         tcase_add_test(tc, duplicate_answers_count_once);
+        tcase_add_test(tc, selective_switch_ends_at_its_answer);
         tcase_add_test(tc, lookalikes_ignored);
         tcase_add_test(tc, stale_frames_drained);
         tcase_add_test(tc, tx_confirm_drains_by_echo);
