@@ -35,18 +35,27 @@ static void bus_arm_timer(lssd_bus *b) {
 
 static void bus_job_end(lssd_bus *b) {
         lssd_job *j = b->job;
-        const lss_master_stats *st = lss_master_get_stats(b->engine);
+        const lss_master_stats *st = lss_master_get_stats(b->engine), *at = &b->job_stats;
+        /* the engine counts over its life: this job's share */
+        uint64_t late = st->late_answers - at->late_answers, stray = st->stray_answers - at->stray_answers;
         log_debug("%s: %s finished (%s); engine: %" PRIu64 " steps, %" PRIu64 " retries, %" PRIu64
                   " timeouts, %" PRIu64 " late, %" PRIu64 " stale, %" PRIu64 " ignored, %" PRIu64
                   " conflicts, wait %u us, latency %u..%u us", b->ifname, lssd_job_name(j),
-                  j->result ? j->result : "failed", st->steps, st->retries, st->timeouts, st->late_answers,
-                  st->stale_frames, st->ignored_frames, st->conflicts, st->timeout_us, st->latency_min_us,
-                  st->latency_max_us);
-        if (st->patience_us)
+                  j->result ? j->result : "failed", st->steps - at->steps, st->retries - at->retries,
+                  st->timeouts - at->timeouts, late, st->stale_frames - at->stale_frames,
+                  st->ignored_frames - at->ignored_frames, st->conflicts - at->conflicts, st->timeout_us,
+                  st->latency_min_us, st->latency_max_us);
+        /* Patience below the configured timeout only lengthened the adaptive
+         * waits (docs/engine.md): nothing the configuration has to hear of. */
+        if ((late || stray) && st->patience_us > (uint64_t) b->config->lss_timeout_ms * 1000)
                 log_notice("%s: devices answered later than lss_timeout_ms = %u allows (%" PRIu64
                            " late, %" PRIu64 " after their step had ended): waited up to %u ms",
-                           b->ifname, b->config->lss_timeout_ms, st->late_answers, st->stray_answers,
+                           b->ifname, b->config->lss_timeout_ms, late, stray,
                            (unsigned) us_to_ms_up(st->patience_us));
+        else if (late || stray)
+                log_debug("%s: %" PRIu64 " answers came after the adaptive wait (%" PRIu64 " after their step had "
+                          "ended): waited up to %u ms", b->ifname, late + stray, stray,
+                          (unsigned) us_to_ms_up(st->patience_us));
         b->job = NULL;
         b->changed |= LSSD_BUS_CHANGED_JOB;
         bus_set_progress(b, 0);
@@ -83,6 +92,7 @@ static void bus_job_continue(lssd_bus *b, const lss_result *r) {
 
 static void bus_job_begin(lssd_bus *b, lssd_job *j) {
         b->job = j;
+        b->job_stats = *lss_master_get_stats(b->engine);
         j->stage = 0;
         b->changed |= LSSD_BUS_CHANGED_JOB | LSSD_BUS_CHANGED_QUEUE_LENGTH;
         bus_set_progress(b, 0);

@@ -50,6 +50,7 @@ struct lssd_bus {
         } retune;
 
         lss_master *engine;
+        lss_master_stats job_stats;      /* the engine's counters when the running job began */
         bool engine_running;             /* we started an operation and did not collect it yet */
         lss_tx_echo echo;                /* which echo confirms the running step */
         lss_frame tx_frame;              /* handed out by the engine, refused by a full tx queue */

@@ -1022,6 +1022,28 @@ def test_lifecycle():
         expect('Stopped' in env.lssd_output(), 'log of the stop')
 
 
+def test_slow_devices():
+    """Devices slower than lss_timeout_ms (40 ms against 20): AutoAssign still
+    gives each its node-ID, and the journal says so once, for that pass, not
+    again for the switch to waiting at the stop, which no device answers."""
+    if os.environ.get('LSSD_TEST_BACKEND') == 'simulate':
+        raise Skip('lssd --simulate has no slow slaves (lss-sim --latency)')
+    slaves = [Slave(0x9A, 3, 1, 0x1100 + i) for i in range(3)]
+    devices = ', '.join('{ vendor = 0x9A; product = 3; revision = 1; serial = 0x%x; node_id = %d; }'
+                        % (s.serial, 10 + i) for i, s in enumerate(slaves))
+    config = ('lss_timeout_ms = 20;\nbuses = ( { interface = "vcan0"; bitrate = 125000; devices = ( %s ); } );\n'
+              % devices)
+    with Env({'vcan0': slaves}, config=config, sim_args=['--latency', '40']) as env:
+        got, _, result = auto_assign(env)
+        expect_eq(sorted(x[3:] for x in got), [[s.serial, 255, 10 + i] for i, s in enumerate(slaves)], 'AutoAssign')
+        expect_eq(result, 'done', 'AutoAssign result')
+        expect_eq(env.stop_lssd(signal.SIGTERM), 0, 'exit status after SIGTERM')
+        out = env.lssd_output()
+        notices = [line for line in out.splitlines() if 'answered later than lss_timeout_ms = 20 allows' in line]
+        expect_eq(len(notices), 1, 'notices of late answers in %r' % out[-3000:])
+        expect(out.index(notices[0]) < out.index('Stopping'), 'the notice came with the pass, not at the stop')
+
+
 def test_second_instance():
     """A second lssd for a bus already served (issue 17): it must not send a
     frame (its switch to waiting would cut into the first one's work), must
@@ -1284,6 +1306,7 @@ TESTS = {
     'txqueue-full': test_txqueue_full,
     'lifecycle': test_lifecycle,
     'second-instance': test_second_instance,
+    'slow-devices': test_slow_devices,
     'check-config': test_check_config,
     'progress': test_progress,
     'scan-found-early': test_scan_found_early,
