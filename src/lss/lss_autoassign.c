@@ -266,6 +266,7 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
                 m->sc.avoid = s->avoid;
                 m->sc.keep_stopped = stops(s);
                 m->sc.no_set_aside = s->plan->dry_run;
+                m->sc.listen = false; /* the second look asks patiently for what the map has */
                 m->sc.pc = m->sc.vpc = 0;
                 PT_CALL(&s->e_pc, proc_enumerate(m, &m->sc));
                 if (m->cancelling)

@@ -27,6 +27,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {
                 step_lss(m, LSS_CS_IDENTIFY_SLAVE);
                 m->step.discovery = true;
+                m->step.late_us = s->ping_late_us;
                 {
                         lss_frame f;
                         lss_encode_fastscan(&f, 0, LSS_FASTSCAN_PING, 0, 0);

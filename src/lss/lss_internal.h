@@ -45,6 +45,7 @@ typedef struct lss_step {
         bool discovery;        /* first contact: full configured wait */
         uint8_t bootup_node;
         uint32_t wait_us;      /* STEP_BOOTUP / STEP_DELAY */
+        uint32_t late_us;      /* nonzero: this step's late guard instead of the rule's */
 
         enum step_phase phase;
         uint64_t sent_at, tx_us, first_at, end_at;
@@ -82,6 +83,7 @@ typedef struct lss_fastscan_state {
         int bit;
         bool found, none;          /* outcome: one slave in configuration / nobody there */
         bool silent;               /* none because nobody answered the ping: no slave is non-configured */
+        uint32_t ping_late_us;     /* nonzero: the ping's late guard (lss_step.late_us) */
 } lss_fastscan_state;
 
 typedef struct lss_assign_state {
@@ -131,6 +133,7 @@ typedef struct lss_scan_state {
         bool selected;          /* this round confirmed by a selective switch (all went to waiting first) */
         bool misbehaving;       /* the pass ended on a slave that does not follow CiA 305 (result.id) */
         bool nobody;            /* the pass found nobody and its ping was silent: no slave is non-configured */
+        bool listen;            /* a Scan: a ping that would end a pass empty listens as long as patience may grow */
         uint64_t deadline;
         lss_identity found, other, phantom;
         lss_identity other_before;  /* the last slave that confirmed another identity than found */

@@ -648,6 +648,7 @@ static int start_enumerate(lss_master *m, const lss_fastscan_known *known, bool 
         m->sc.avoid = NULL;
         m->sc.keep_stopped = keep_stopped;
         m->sc.no_set_aside = false;
+        m->sc.listen = true;
         return start_op(m, proc_enumerate_top, true, now);
 }
 

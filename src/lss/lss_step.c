@@ -140,10 +140,7 @@ static bool step_all_in(const lss_step *s) {
  * asked for (another master's, a fault) says nothing about our timing. */
 static bool asked_lately(const lss_master *m, const lss_frame *f) {
         uint64_t at = m->asked_at[f->data[0]];
-        uint64_t cap = (uint64_t) LSS_PATIENCE_FACTOR * m->timing.cfg.timeout_us;
-        if (cap > LSS_PATIENCE_MAX_US)
-                cap = LSS_PATIENCE_MAX_US;
-        return at != 0 && m->now + 1 - at <= 2 * cap;
+        return at != 0 && m->now + 1 - at <= 2ull * lss_timing_patience_cap(&m->timing);
 }
 
 /* An LSS answer that came when no step could take it was late for its own
@@ -283,7 +280,7 @@ void step_on_time(lss_master *m, uint64_t now) {
                 }
                 m->stats.timeouts++;
                 s->phase = PHASE_LATE_GUARD;
-                s->end_at = d + lss_timing_late_guard(&m->timing, s->discovery);
+                s->end_at = d + (s->late_us ? s->late_us : lss_timing_late_guard(&m->timing, s->discovery));
                 return;
         case PHASE_ANSWER_GUARD:
         case PHASE_LATE_GUARD:

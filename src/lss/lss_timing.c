@@ -76,10 +76,13 @@ uint32_t lss_timing_wait(const lss_timing *t, bool discovery) {
 /* Each late answer lengthens the waits, and the next late answer comes
  * after the longer wait: without a cap, answers that are not what they seem
  * (a frame of another master, a fault) would grow them step by step. */
-static void set_patience(lss_timing *t, uint64_t p) {
+uint32_t lss_timing_patience_cap(const lss_timing *t) {
         uint64_t cap = (uint64_t) LSS_PATIENCE_FACTOR * t->cfg.timeout_us;
-        if (cap > LSS_PATIENCE_MAX_US)
-                cap = LSS_PATIENCE_MAX_US;
+        return (uint32_t) (cap < LSS_PATIENCE_MAX_US ? cap : LSS_PATIENCE_MAX_US);
+}
+
+static void set_patience(lss_timing *t, uint64_t p) {
+        uint64_t cap = lss_timing_patience_cap(t);
         t->patience_us = (uint32_t) (p < cap ? p : cap);
         t->calm = 0;
 }

@@ -59,5 +59,8 @@ void lss_timing_on_stray(lss_timing *t);
 uint32_t lss_timing_wait(const lss_timing *t, bool discovery);
 uint32_t lss_timing_answer_guard(const lss_timing *t);
 uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery);
+/* The longest wait patience may grow to: LSS_PATIENCE_FACTOR x timeout, at
+ * most LSS_PATIENCE_MAX_US. */
+uint32_t lss_timing_patience_cap(const lss_timing *t);
 /* Time the frame takes on the wire at the configured bit rate (0 if unknown). */
 uint32_t lss_timing_frame_us(const lss_timing *t, const lss_frame *f);

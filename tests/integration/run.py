@@ -1023,9 +1023,10 @@ def test_lifecycle():
 
 
 def test_slow_devices():
-    """Devices slower than lss_timeout_ms (40 ms against 20): AutoAssign still
-    gives each its node-ID, and the journal says so once, for that pass, not
-    again for the switch to waiting at the stop, which no device answers."""
+    """Devices slower than lss_timeout_ms (40 ms against 20): a Scan finds them
+    (it said "0 devices" before), AutoAssign gives each its node-ID, and the
+    journal says so once for each of the two, not again for the switch to
+    waiting at the stop, which no device answers."""
     if os.environ.get('LSSD_TEST_BACKEND') == 'simulate':
         raise Skip('lssd --simulate has no slow slaves (lss-sim --latency)')
     slaves = [Slave(0x9A, 3, 1, 0x1100 + i) for i in range(3)]
@@ -1034,14 +1035,16 @@ def test_slow_devices():
     config = ('lss_timeout_ms = 20;\nbuses = ( { interface = "vcan0"; bitrate = 125000; devices = ( %s ); } );\n'
               % devices)
     with Env({'vcan0': slaves}, config=config, sim_args=['--latency', '40']) as env:
+        found = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 1, 'sdo', 'b', 'false')[0]
+        expect_eq(sorted(tuple(d[:4]) for d in found), sorted(s.identity for s in slaves), 'Scan')
         got, _, result = auto_assign(env)
         expect_eq(sorted(x[3:] for x in got), [[s.serial, 255, 10 + i] for i, s in enumerate(slaves)], 'AutoAssign')
         expect_eq(result, 'done', 'AutoAssign result')
         expect_eq(env.stop_lssd(signal.SIGTERM), 0, 'exit status after SIGTERM')
         out = env.lssd_output()
         notices = [line for line in out.splitlines() if 'answered later than lss_timeout_ms = 20 allows' in line]
-        expect_eq(len(notices), 1, 'notices of late answers in %r' % out[-3000:])
-        expect(out.index(notices[0]) < out.index('Stopping'), 'the notice came with the pass, not at the stop')
+        expect_eq(len(notices), 2, 'notices of late answers in %r' % out[-3000:])
+        expect(out.index(notices[1]) < out.index('Stopping'), 'the notices came with the jobs, not at the stop')
 
 
 def test_second_instance():

@@ -124,6 +124,25 @@ START_TEST(slowscan_unverifiable) {
 }
 END_TEST
 
+/* Slaves slower than the timeout (40 ms against 20): the first ping of a
+ * Scan is answered after its wait. Before, the pass pinged once, found
+ * nobody and said so (0 devices, OK), the late answer only raising the
+ * waits afterwards; a Scan's ping that would end it empty now listens as
+ * long as patience may grow (4 x the timeout). */
+START_TEST(scan_finds_slow_slaves) {
+        lss_slave_faults f = faults_latency(40000, 2000);
+        membus *b = bus_random(3, 311, 0xEC, 0x1234, &f);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->n_devices, 3);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* Slaves that lose 3 % of the frames they receive (a receive FIFO overrun,
  * as qemu's SJA1000 under load): a lost identify query or selective switch
  * costs a retry, never a slave. */
@@ -436,6 +455,7 @@ int main(void) {
         tcase_add_test(tc, slowscan_edges);
         tcase_add_test(tc, slowscan_without_identify);
         tcase_add_test(tc, slowscan_unverifiable);
+        tcase_add_test(tc, scan_finds_slow_slaves);
         tcase_add_test(tc, scans_keep_lossy_slaves);
         tcase_add_test(tc, slowscan_slave_left);
         tcase_add_test(tc, slowscan_unresolved_and_unverifiable);
