@@ -1219,7 +1219,9 @@ def test_progress():
             samples = []
             while not done.is_set():
                 p = env.get(b, BUS_IFACE, 'Progress')
-                if not done.is_set():
+                # read while the job ran, not after its end (Progress is then
+                # 0 again) and before its reply reached the thread
+                if not done.is_set() and env.get(b, BUS_IFACE, 'Job') == 'Scan':
                     samples.append((time.monotonic() - t0, p))
                 time.sleep(0.25)
             t.join()
