@@ -206,9 +206,9 @@ struct lss_master {
         lss_bitrate_state br;
 
         lss_frame txq[LSS_TXQ_LEN];
+        unsigned txq_head, txq_len;
         lss_frame final_answer;   /* the last answer that ended its step at once (a selective switch's) */
         uint64_t answers_until;   /* further answers to that step may be on the wire until then */
-        unsigned txq_head, txq_len;
 
         lss_result result;
         lss_device *devices;

@@ -981,6 +981,8 @@ def test_lifecycle():
             msgs += env.notify.recv(4096).decode() + '\n'
         expect('STATUS=' in msgs, 'no STATUS= in %r' % msgs)
         if env.real:
+            # lssd sent it before READY; candump, another process, may write it a little later
+            env.wait_until(lambda: env.lss_frames('vcan0'), what='the first LSS frame in the candump')
             first = env.lss_frames('vcan0')[0]
             expect_eq((first[1], first[2][:2]), (0x7E5, b'\x04\x00'), 'first frame')
 
