@@ -408,17 +408,6 @@ static bool rounds_exhausted(const lss_master *m, const lss_scan_state *s) {
         return s->rounds - finds >= finds + margin || s->rounds >= 2u * LSS_ENUMERATE_MAX_FINDS + margin;
 }
 
-/* A Scan that finds nobody says the bus is empty, and nothing checks that
- * later: its silent ping could be slaves slower than the timeout, whose
- * answers come after the step (they only raise the waits then). So that
- * ping listens as long as patience may grow; a late answer in it counts
- * and makes the waits patient (docs/engine.md). */
-static uint32_t listen_us(const lss_master *m) {
-        uint32_t cap = lss_timing_patience_cap(&m->timing), wait = lss_timing_wait(&m->timing, true);
-        uint32_t rule = lss_timing_late_guard(&m->timing, true);
-        return cap > wait + rule ? cap - wait : rule;
-}
-
 int proc_enumerate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
@@ -450,8 +439,11 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 break;
                         }
                         s->fs = (lss_fastscan_state) { .known = s->known };
+                        /* A Scan that finds nobody says the bus is empty, and
+                         * nothing checks that later: its ping may be answered by
+                         * slaves slower than the timeout, after the step. */
                         if (s->listen && s->n_cand == 0)
-                                s->fs.ping_late_us = listen_us(m);
+                                s->fs.ping_late_us = lss_timing_listen_guard(&m->timing);
                         if (s->n_cand > 0) {
                                 /* vendor, product and revision of the last find: likely those of the next */
                                 s->fs.guess = s->cand[s->n_cand - 1].id;

@@ -131,8 +131,10 @@ static bool answer_is_final(const lss_step *s) {
 
 /* An SDO step asks several node-IDs and waits for all of them: it ends
  * early only when every one has answered. */
+_Static_assert(LSS_MAX_TX < 32, "step.sdo_answered has a bit for each frame of a step");
+
 static bool step_all_in(const lss_step *s) {
-        return s->kind != STEP_SDO || s->sdo_answered == (s->n_tx >= 32 ? UINT32_MAX : (1u << s->n_tx) - 1);
+        return s->kind != STEP_SDO || s->sdo_answered == (1u << s->n_tx) - 1;
 }
 
 /* Could f be the late answer of a step of ours? Only if a step waited for

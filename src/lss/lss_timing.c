@@ -122,6 +122,12 @@ uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery) {
         return g > t->cfg.guard_floor_us ? g : t->cfg.guard_floor_us;
 }
 
+uint32_t lss_timing_listen_guard(const lss_timing *t) {
+        uint32_t cap = lss_timing_patience_cap(t), wait = lss_timing_wait(t, true);
+        uint32_t rule = lss_timing_late_guard(t, true);
+        return cap > wait + rule ? cap - wait : rule;
+}
+
 uint32_t lss_timing_frame_us(const lss_timing *t, const lss_frame *f) {
         if (!t->cfg.bitrate)
                 return 0;

@@ -62,5 +62,9 @@ uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery);
 /* The longest wait patience may grow to: LSS_PATIENCE_FACTOR x timeout, at
  * most LSS_PATIENCE_MAX_US. */
 uint32_t lss_timing_patience_cap(const lss_timing *t);
+/* The late guard of a discovery step whose silence nothing checks later (a
+ * Scan's last ping): with the wait, as long as patience may grow; a late
+ * answer in it counts and makes the waits patient. */
+uint32_t lss_timing_listen_guard(const lss_timing *t);
 /* Time the frame takes on the wire at the configured bit rate (0 if unknown). */
 uint32_t lss_timing_frame_us(const lss_timing *t, const lss_frame *f);

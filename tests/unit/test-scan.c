@@ -137,6 +137,7 @@ START_TEST(scan_finds_slow_slaves) {
         const lss_result *r = run(m, b);
         ck_assert_int_eq(r->status, LSS_OK);
         ck_assert_uint_eq(r->n_devices, 3);
+        assert_devices_real(b, r);
         ck_assert(all_waiting(b));
         lss_master_free(m);
         membus_free(b);
