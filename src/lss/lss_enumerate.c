@@ -438,7 +438,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                             s->n_cand);
                                 break;
                         }
-                        s->fs = (lss_fastscan_state) { .known = s->known };
+                        /* slaves kept in configuration may answer every request */
+                        s->fs = (lss_fastscan_state) { .known = s->known, .others_answer = s->n_kept > 0 };
                         /* A Scan that finds nobody says the bus is empty, and
                          * nothing checks that later: its ping may be answered by
                          * slaves slower than the timeout, after the step. */

@@ -12,6 +12,35 @@
  * callers check the identity again by inquiry before configuring anything. */
 #include "lss/lss_internal.h"
 
+/* Every answered step narrows the slaves taking part to those that answered
+ * it (a bit read 0, a field confirmed: the others no longer match what is
+ * asked). So once one slave alone answered a step (one frame in the full
+ * answer guard), only it can answer the steps after: a bit step then ends at
+ * its answer, without the guard that waits for other slaves' answers. One
+ * frame may still be several slaves (identical frames sent at once merge on
+ * CAN) whose answers part later; such an answer lands in the next step and
+ * reads a bit wrong. So the last bit of a field and every confirmation keep
+ * the guard: a field is only ever confirmed once every answer before it is
+ * in, and a wrong bit costs what a late answer costs, a field nobody
+ * confirms and a retry. After one, the guard stays for the rest of this
+ * fastscan; also on a sign of other answers (the same answer again, a stray
+ * one, frames lost), a new ping, or slaves kept in configuration (they may
+ * answer any request). */
+static void judge_lone(lss_master *m, lss_fastscan_state *s) {
+        if (m->final_repeated || m->stats.stray_answers != s->strays || m->step.void_ || s->others_answer ||
+            s->lone_failed)
+                s->lone = false;
+        else if (step_answered(m) && !m->step.ends_at_answer)
+                s->lone = m->step.n_frames == 1;
+        s->strays = m->stats.stray_answers;
+}
+
+/* `unguarded`: the step may end at its answer when one slave alone takes part */
+#define FASTSCAN_STEP(m, s, frame_expr, unguarded) \
+        do { lss_frame f__; frame_expr; step_lss(m, LSS_CS_IDENTIFY_SLAVE); step_add_tx(m, &f__); \
+             m->step.ends_at_answer = (s)->lone && (unguarded); step_start(m); PT_YIELD(&(s)->pc); \
+             judge_lone(m, s); } while (0)
+
 static uint32_t known_prefix(const lss_fastscan_known *k, unsigned sub) {
         unsigned n = k->known_bits[sub];
         if (n == 0)
@@ -25,6 +54,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         s->found = s->none = s->silent = false;
         s->guessing = s->n_guess > 0;
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {
+                s->lone = false;
+                s->strays = m->stats.stray_answers;
                 step_lss(m, LSS_CS_IDENTIFY_SLAVE);
                 m->step.discovery = true;
                 m->step.late_us = s->ping_late_us;
@@ -35,6 +66,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                 }
                 step_start(m);
                 PT_YIELD(&s->pc);
+                judge_lone(m, s);
                 if (m->step.void_)
                         continue;
                 if (!step_answered(m)) {
@@ -49,10 +81,9 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                  * is confirmed directly, one step instead of 33;
                                  * scanned only when nobody has it. */
                                 s->value[s->sub] = lss_identity_field(&s->guess, s->sub);
-                                STEP_REQUEST(m, &s->pc,
+                                FASTSCAN_STEP(m, s,
                                              lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
-                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)),
-                                             LSS_CS_IDENTIFY_SLAVE);
+                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false);
                                 if (step_answered(m))
                                         continue;
                                 s->guessing = false;
@@ -66,11 +97,10 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                         s->value[s->sub] = known_prefix(&s->known, s->sub);
                                         if (s->known.known_bits[s->sub] > 0) {
                                                 /* does anybody have the known top bits at all? */
-                                                STEP_REQUEST(m, &s->pc,
+                                                FASTSCAN_STEP(m, s,
                                                              lss_encode_fastscan(&f__, s->value[s->sub],
                                                                                  (uint8_t) (32 - s->known.known_bits[s->sub]),
-                                                                                 (uint8_t) s->sub, (uint8_t) s->sub),
-                                                             LSS_CS_IDENTIFY_SLAVE);
+                                                                                 (uint8_t) s->sub, (uint8_t) s->sub), true);
                                                 if (!step_answered(m) && s->field_try >= m->timing.cfg.retries) {
                                                         s->none = true;
                                                         goto out;
@@ -79,11 +109,10 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                         continue;
                                         }
                                         for (s->bit = 31 - s->known.known_bits[s->sub]; s->bit >= 0; s->bit--) {
-                                                STEP_REQUEST(m, &s->pc,
+                                                FASTSCAN_STEP(m, s,
                                                              lss_encode_fastscan(&f__, s->value[s->sub],
                                                                                  (uint8_t) s->bit, (uint8_t) s->sub,
-                                                                                 (uint8_t) s->sub),
-                                                             LSS_CS_IDENTIFY_SLAVE);
+                                                                                 (uint8_t) s->sub), s->bit > 0);
                                                 if (!step_answered(m))
                                                         s->value[s->sub] |= 1u << s->bit;
                                                 if (m->cancelling)
@@ -91,15 +120,16 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                 master_progress(m, (s->sub * 33.0 + (32 - s->bit)) / 133.0);
                                         }
                                 }
-                                STEP_REQUEST(m, &s->pc,
+                                FASTSCAN_STEP(m, s,
                                              lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
-                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)),
-                                             LSS_CS_IDENTIFY_SLAVE);
+                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false);
                                 if (step_answered(m))
                                         break;
                                 /* Nobody matched, so the slaves still expect this
                                  * field: scan it again without a new ping. */
                                 m->stats.retries++;
+                                s->lone_failed = s->lone_failed || s->lone;
+                                s->lone = false;
                                 if (s->known.known_bits[s->sub] >= 32 && s->sub >= s->confirmed &&
                                     s->field_try >= m->timing.cfg.retries) {
                                         /* a known value nobody confirms: no such slave

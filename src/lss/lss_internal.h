@@ -46,6 +46,8 @@ typedef struct lss_step {
         uint8_t bootup_node;
         uint32_t wait_us;      /* STEP_BOOTUP / STEP_DELAY */
         uint32_t late_us;      /* nonzero: this step's late guard instead of the rule's */
+        bool ends_at_answer;   /* the first answer is the only one that can come (or all
+                                * are the same): no answer guard (lss_step.c) */
 
         enum step_phase phase;
         uint64_t sent_at, tx_us, first_at, end_at;
@@ -84,6 +86,10 @@ typedef struct lss_fastscan_state {
         bool found, none;          /* outcome: one slave in configuration / nobody there */
         bool silent;               /* none because nobody answered the ping: no slave is non-configured */
         uint32_t ping_late_us;     /* nonzero: the ping's late guard (lss_step.late_us) */
+        bool others_answer;        /* slaves kept in configuration may answer any request */
+        bool lone;                 /* one slave alone answered a step: only it takes part now */
+        bool lone_failed;          /* a field read while lone was not confirmed */
+        uint64_t strays;           /* stats.stray_answers when lone was last judged */
 } lss_fastscan_state;
 
 typedef struct lss_assign_state {
@@ -209,6 +215,7 @@ struct lss_master {
         unsigned txq_head, txq_len;
         lss_frame final_answer;   /* the last answer that ended its step at once (a selective switch's) */
         uint64_t answers_until;   /* further answers to that step may be on the wire until then */
+        bool final_repeated;      /* the same answer came again within that time */
 
         lss_result result;
         lss_device *devices;

@@ -22,6 +22,9 @@ void step_add_tx(lss_master *m, const lss_frame *f) {
 
 void step_selective(lss_master *m, const lss_identity *id) {
         step_lss(m, LSS_CS_SWITCH_SEL_RESPONSE);
+        /* its answer says nothing but "here" (cs 0x44, the rest reserved): a
+         * second slave's would be the same frame and count once */
+        m->step.ends_at_answer = true;
         for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
                 lss_frame f;
                 lss_encode_switch_selective(&f, i, lss_identity_field(id, i));
@@ -121,14 +124,6 @@ static bool step_matches(const lss_step *s, const lss_frame *f) {
         return s->kind == STEP_LSS && lss_is_response(f) && f->data[0] == (uint8_t) s->expect_cs;
 }
 
-/* A selective switch's answer says nothing but "here" (cs 0x44, the rest
- * reserved): a second slave's would be the same frame and count once, so
- * nothing can come after the first that changes the step, and it ends there
- * (no answer guard). Such a duplicate arriving later is no late answer. */
-static bool answer_is_final(const lss_step *s) {
-        return s->kind == STEP_LSS && s->expect_cs == LSS_CS_SWITCH_SEL_RESPONSE;
-}
-
 /* An SDO step asks several node-IDs and waits for all of them: it ends
  * early only when every one has answered. */
 _Static_assert(LSS_MAX_TX < 32, "step.sdo_answered has a bit for each frame of a step");
@@ -152,8 +147,10 @@ void step_on_stray(lss_master *m, const lss_frame *f) {
                 return;
         /* the same "here" again, in the time the skipped answer guard would
          * have taken it: another slave's or a duplicate, not a late answer */
-        if (m->now <= m->answers_until && memcmp(f->data, m->final_answer.data, 8) == 0)
+        if (m->now <= m->answers_until && memcmp(f->data, m->final_answer.data, 8) == 0) {
+                m->final_repeated = true;
                 return;
+        }
         m->stats.stray_answers++;
         lss_timing_on_stray(&m->timing);
         note_patience(m);
@@ -215,13 +212,14 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                         s->late = true;
                         m->stats.late_answers++;
                 }
-                if (answer_is_final(s)) {
+                if (s->ends_at_answer) {
                         /* Further identical answers may still take the wire
                          * ahead of the next request (answers win arbitration):
                          * without tx confirmation that request's wait counts
                          * from when they would be off it. */
                         m->answers_until = rx + lss_timing_answer_guard(&m->timing);
                         m->final_answer = *f;
+                        m->final_repeated = false;
                         s->phase = PHASE_DONE;
                 } else if (step_all_in(s)) {
                         s->phase = PHASE_ANSWER_GUARD;

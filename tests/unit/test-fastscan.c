@@ -123,6 +123,82 @@ START_TEST(fastscan_wrong_known_value) {
 }
 END_TEST
 
+/* Answered fastscan steps and how soon the next request followed. */
+typedef struct answer_gaps {
+        uint64_t at_answer;
+        unsigned answers, quick;    /* quick: next request within one frame time */
+} answer_gaps;
+
+static void time_answer_gaps(void *ud, const lss_frame *f, uint64_t t) {
+        answer_gaps *g = ud;
+        if (lss_is_response(f) && f->data[0] == LSS_CS_IDENTIFY_SLAVE) {
+                g->at_answer = t;
+                g->answers++;
+        } else if (lss_is_request(f) && g->at_answer) {
+                /* the next request's own frame time (<= 135 bits at 125 kbit/s), no guard before it */
+                if (t - g->at_answer <= 1080)
+                        g->quick++;
+                g->at_answer = 0;
+        }
+}
+
+/* One slave alone answers: each answered step narrows who takes part to
+ * those that answered, so after the ping only it can answer, and its bit
+ * steps end at the answer (all but a field's last bit, and the
+ * confirmations). Before, every answered step waited for the answer guard. */
+START_TEST(lone_slave_bits_end_at_answer) {
+        lss_slave_faults f = faults_latency(1000, 200);
+        membus *b = bus_random(1, 7, 0, 0, &f);
+        answer_gaps g = { 0 };
+        membus_set_trace(b, time_answer_gaps, &g);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_fastscan(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert(lss_identity_equal(&r->id, &membus_slave(b, 0)->id));
+        ck_assert_uint_eq(membus_get_stats(b)->lss_requests, 133 + 4);
+        ck_assert_uint_eq(lss_master_get_stats(m)->retries, 0);
+        /* the bits read 0 but a field's last, of 4 random fields (the ping,
+         * last bits and confirmations keep the guard: at most 9 of them) */
+        const lss_identity *id = &membus_slave(b, 0)->id;
+        unsigned zeros = 0;
+        for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
+                zeros += 31 - (unsigned) __builtin_popcount(lss_identity_field(id, i) >> 1);
+        ck_assert_msg(g.quick == zeros, "%u of %u answered steps ended at the answer, %u bits read 0", g.quick,
+                      g.answers, zeros);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* Identical answers sent at once merge into one frame on CAN: one frame
+ * can be several slaves, whose answers part on a later step; taken for a
+ * lone slave, that answer lands in the next step and reads a bit wrong. It
+ * costs a retry of the field (the last bit and the confirmation keep the
+ * guard, so nothing wrong is confirmed), never a wrong identity: 32 slaves
+ * of one product, merging as on CAN, each found and given its node-ID. */
+START_TEST(merged_answers_cost_a_retry) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        /* seed 5: once, two slaves whose answers merged part on the next step
+         * (the only retry; none before the lone-slave rule) */
+        membus *b = bus_random(32, 5, 0xEC, 0x1234, &f);
+        membus_set_merge_identical(b, true);
+        lss_master *m = master_default();
+        for (uint8_t nid = 1; nid <= 32; nid++) {
+                ck_assert_int_eq(lss_master_fastscan_assign(m, NULL, nid, LSS_ASSIGN_STORE, membus_now(b)), 0);
+                const lss_result *r = run(m, b);
+                ck_assert_msg(r->status == LSS_OK, "node-ID %u: %s", nid, r->message);
+                lss_slave *s = membus_find(b, &r->id);
+                ck_assert_ptr_nonnull(s);
+                ck_assert_uint_eq(s->st.pending_node_id, nid);
+        }
+        ck_assert_uint_gt(membus_get_stats(b)->merged_frames, 0);
+        ck_assert_uint_le(lss_master_get_stats(m)->retries, 1);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 static void enumerate_n(size_t n, uint64_t seed, bool known) {
         lss_slave_faults f = faults_latency(1000, 300);
         membus *b = bus_random(n, seed, known ? 0xEC : 0, known ? 0x1234 : 0, &f);
@@ -388,6 +464,8 @@ int main(void) {
         tcase_add_test(tc, enumerate_duplicate_answers);
         tcase_add_test(tc, enumerate_with_late_answers);
         tcase_add_test(tc, foreign_answers_leave_waits_alone);
+        tcase_add_test(tc, lone_slave_bits_end_at_answer);
+        tcase_add_test(tc, merged_answers_cost_a_retry);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
