@@ -5,9 +5,11 @@
 
 #include "ctl/ctl_map_entry.h"
 
-void ctl_print_map_entry(const uint32_t id[4], uint8_t node_id, bool active, bool comma) {
-        printf("      %s{ vendor = 0x%08" PRIx32 "; product = 0x%08" PRIx32 "; revision = 0x%08" PRIx32
-               "; serial = 0x%08" PRIx32 "; node_id = ", active ? "" : "# ", id[0], id[1], id[2], id[3]);
+void ctl_print_map_entry(const uint32_t id[4], bool revision_known, uint8_t node_id, bool active, bool comma) {
+        printf("      %s{ vendor = 0x%08" PRIx32 "; product = 0x%08" PRIx32 "; ", active ? "" : "# ", id[0], id[1]);
+        if (revision_known)
+                printf("revision = 0x%08" PRIx32 "; ", id[2]);
+        printf("serial = 0x%08" PRIx32 "; node_id = ", id[3]);
         if (node_id >= 1 && node_id <= 127)
                 printf("%u; }", node_id);
         else
@@ -24,6 +26,6 @@ void ctl_print_replacement(const char *ifname, const uint32_t id[4], uint8_t nod
         printf("\n%s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 " %s at node-ID %u.\n"
                "%s the map entry of the missing device in lssd.conf(5) by:\n",
                ifname, id[0], id[1], id[2], id[3], detail, node_id, dry ? "After the pass, replace" : "Replace");
-        ctl_print_map_entry(id, node_id, true, false);
+        ctl_print_map_entry(id, true, node_id, true, false);
         putchar('\n');
 }

@@ -27,6 +27,7 @@ typedef struct found {
         char *outcome, *detail;   /* auto-assign */
         bool revision_unknown;    /* a missing device from a map entry without revision */
         bool by_lss, by_sdo;      /* scan: the device's FoundBy */
+        bool kept;                /* scan --as-config: in the map, not found by this scan */
 } found;
 
 typedef struct results {
@@ -304,7 +305,38 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
 
 /* scan --as-config: one device of a map line, 0x%08x as lssd.conf(5) shows them */
 static void print_map_entry(const found *f, bool active, bool comma) {
-        ctl_print_map_entry(f->id, f->new_id, active, comma);
+        ctl_print_map_entry(f->id, !f->revision_unknown, f->new_id, active, comma);
+}
+
+/* A map printed from a scan keeps the map's devices the scan did not find
+ * (switched off, unplugged for service): written over lssd.conf, it would
+ * otherwise drop them from the map without a word. */
+static int add_map_devices_not_found(ctl_context *c, results *res, char **ifnames, size_t n) {
+        ctl_objects o = { 0 };
+        int r = ctl_objects_load(c, &o);
+        if (r < 0)
+                return r;
+        for (size_t k = 0; k < o.n_devices && r >= 0; k++) {
+                const ctl_device_info *d = &o.devices[k];
+                size_t b = 0;
+                bool seen = false;
+                if (d->mapped_node_id < 1 || d->mapped_node_id > 127)
+                        continue;
+                while (b < n && strcmp(ifnames[b], d->ifname) != 0)
+                        b++;
+                for (size_t i = 0; i < res->n && !seen; i++)
+                        seen = strcmp(res->v[i].ifname, d->ifname) == 0 &&
+                               memcmp(res->v[i].id, d->id, sizeof(d->id)) == 0;
+                if (b == n || seen)
+                        continue;
+                r = results_add(res, ifnames[b], d->id, 0xFF, d->mapped_node_id, NULL, NULL);
+                if (r >= 0) {
+                        res->v[res->n - 1].kept = true;
+                        res->v[res->n - 1].revision_unknown = d->revision_unknown;
+                }
+        }
+        ctl_objects_done(&o);
+        return r;
 }
 
 static int compare_by_node_id(const void *a, const void *b) {
@@ -315,17 +347,20 @@ static int compare_by_node_id(const void *a, const void *b) {
 }
 
 /* The found devices as the buses list of lssd.conf(5): each configured
- * device a map entry at its node-ID, what cannot be one commented out. */
+ * device a map entry at its node-ID, and the map's devices not found at
+ * theirs; what cannot be one commented out. */
 static int print_config(ctl_context *c, const results *res, char **paths, char **ifnames, size_t n) {
         const found **v = calloc(res->n ? res->n : 1, sizeof(*v));
-        size_t mapped = 0, left_out = 0;
+        size_t mapped = 0, kept = 0, left_out = 0;
         char when[64] = "";
         time_t now = time(NULL);
         struct tm tm;
 
         if (!v)
                 return ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
-        /* a device is mapped when its node-ID is 1..127 and no other device on its bus has it */
+        /* a device found is mapped when its node-ID is 1..127 and no other
+         * device found on its bus has it; one kept from the map when no
+         * device found has its node-ID */
         bool *ok = calloc(res->n ? res->n : 1, sizeof(*ok));
         if (!ok) {
                 free(v);
@@ -335,9 +370,11 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
                 const found *f = &res->v[i];
                 ok[i] = f->new_id >= 1 && f->new_id <= 127 && !sdo_only(f);
                 for (size_t k = 0; k < res->n && ok[i]; k++)
-                        if (k != i && res->v[k].new_id == f->new_id && strcmp(res->v[k].ifname, f->ifname) == 0)
+                        if (k != i && res->v[k].new_id == f->new_id && strcmp(res->v[k].ifname, f->ifname) == 0 &&
+                            (f->kept || !res->v[k].kept))
                                 ok[i] = false;
-                mapped += ok[i];
+                mapped += ok[i] && !f->kept;
+                kept += ok[i] && f->kept;
                 left_out += !ok[i];
         }
         if (gmtime_r(&now, &tm))
@@ -346,6 +383,8 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
         printf("# lssd.conf(5) buses as found by 'lssctl scan --as-config', %s, lssctl %s:\n", when, LSSCTL_VERSION);
         printf("# %zu device%s mapped at %s current node-ID%s", mapped, mapped == 1 ? "" : "s",
                mapped == 1 ? "its" : "their", mapped == 1 ? "" : "s");
+        if (kept > 0)
+                printf(", %zu kept from the map (not found)", kept);
         if (left_out > 0)
                 printf(", %zu commented out (see there)", left_out);
         printf(", on");
@@ -383,11 +422,17 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
                         const found *f = v[i];
                         if (ok[f - res->v]) {
                                 print_map_entry(f, true, i < last);
+                                if (f->kept)
+                                        printf("  # in the map, not found by this scan: kept (delete the line if "
+                                               "the device is gone)");
                                 putchar('\n');
                                 continue;
                         }
                         print_map_entry(f, false, false);
-                        if (sdo_only(f))
+                        if (f->kept)
+                                printf("  # in the map, not found by this scan; node-ID %u is another device's now\n",
+                                       f->new_id);
+                        else if (sdo_only(f))
                                 printf("  # found by SDO only: it does not answer LSS, so lssd cannot give it a "
                                        "node-ID\n");
                         else if (f->new_id == 0xFF)
@@ -498,6 +543,8 @@ static int scan_like(ctl_context *c, bool assign) {
         }
         annotate_from_objects(c, &res, !assign);
         r = 0;
+        if (c->as_config && (r = add_map_devices_not_found(c, &res, ifnames, n)) < 0)
+                goto finish;
         if (c->as_config)
                 r = print_config(c, &res, paths, ifnames, n);
         else

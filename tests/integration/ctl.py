@@ -274,6 +274,17 @@ def test_scan():
         ctl.fails('usage', '--vendor and --product go together', 'scan', '--vendor', '0x9A')
 
 
+def check_printed_map(env, out):
+    """lssd --check-config takes what scan --as-config printed, without a warning."""
+    path = os.path.join(env.dir, 'frozen.conf')
+    with open(path, 'w') as f:
+        f.write(out)
+    check = subprocess.run([os.environ.get('LSSD_BINARY', 'lssd'), '--check-config', path], capture_output=True,
+                           text=True)
+    expect_eq(check.returncode, 0, 'lssd --check-config on the printed map: %s%s' % (check.stdout, check.stderr))
+    expect('warning' not in (check.stdout + check.stderr).lower(), 'check-config warns: %r' % check.stderr)
+
+
 def test_scan_config():
     """scan --as-config (issue 18, commissioning): the bus as it is, printed as
     the buses of lssd.conf(5), passes lssd --check-config, and lssd started
@@ -307,13 +318,7 @@ def test_scan_config():
                   'the non-configured device and the one found by SDO only, commented out')
         expect('interface = "vcan0";' in out and 'bitrate = 125000;' in out, 'the bus: %r' % out)
 
-        path = os.path.join(env.dir, 'frozen.conf')
-        with open(path, 'w') as f:
-            f.write(out)
-        check = subprocess.run([os.environ.get('LSSD_BINARY', 'lssd'), '--check-config', path], capture_output=True,
-                               text=True)
-        expect_eq(check.returncode, 0, 'lssd --check-config on the printed map: %s%s' % (check.stdout, check.stderr))
-        expect('warning' not in (check.stdout + check.stderr).lower(), 'check-config warns: %r' % check.stderr)
+        check_printed_map(env, out)
 
         # lssd with the printed map (the test's LSS timeout in front, as an
         # installed file has its global settings): the bus already matches it
@@ -621,6 +626,17 @@ def test_auto_assign_partial():
                'the missing device in list: %r' % out)
         got = [(x['serial'], x['revision_known']) for x in ctl.ok('list', '--json').json]
         expect((17, False) in got and all(k for s, k in got if s != 17), 'revision_known in list --json: %r' % got)
+        # A map printed from a scan keeps the map's device it did not find
+        # (written over lssd.conf, it would drop it without a word): at the
+        # map's node-ID, without the revision the map does not have.
+        out = ctl.ok('scan', '--as-config').out
+        env.step('lssctl scan --as-config with a device of the map missing:\n' + out)
+        expect('2 devices mapped at their current node-IDs, 1 kept from the map (not found), on vcan0.' in out,
+               'header counts: %r' % out)
+        expect('{ vendor = 0x0000009a; product = 0x00000003; serial = 0x00000011; node_id = 7; }  # in the map, '
+               'not found by this scan: kept (delete the line if the device is gone)' in out,
+               'the missing device kept: %r' % out)
+        check_printed_map(env, out)
 
 
 def test_set_bitrate():
