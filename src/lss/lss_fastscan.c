@@ -54,8 +54,10 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         s->found = s->none = s->silent = false;
         s->guessing = s->n_guess > 0;
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {
+                /* from this ping on: signs of other slaves from before say nothing */
                 s->lone = false;
                 s->strays = m->stats.stray_answers;
+                m->final_repeated = false;
                 step_lss(m, LSS_CS_IDENTIFY_SLAVE);
                 m->step.discovery = true;
                 m->step.late_us = s->ping_late_us;

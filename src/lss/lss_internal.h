@@ -213,7 +213,7 @@ struct lss_master {
 
         lss_frame txq[LSS_TXQ_LEN];
         unsigned txq_head, txq_len;
-        lss_frame final_answer;   /* the last answer that ended its step at once (a selective switch's) */
+        lss_frame final_answer;   /* the last answer that ended its step at once (step.ends_at_answer) */
         uint64_t answers_until;   /* further answers to that step may be on the wire until then */
         bool final_repeated;      /* the same answer came again within that time */
 

@@ -145,7 +145,7 @@ static bool asked_lately(const lss_master *m, const lss_frame *f) {
 void step_on_stray(lss_master *m, const lss_frame *f) {
         if (!lss_is_response(f) || !asked_lately(m, f))
                 return;
-        /* the same "here" again, in the time the skipped answer guard would
+        /* the same answer again, in the time the skipped answer guard would
          * have taken it: another slave's or a duplicate, not a late answer */
         if (m->now <= m->answers_until && memcmp(f->data, m->final_answer.data, 8) == 0) {
                 m->final_repeated = true;
