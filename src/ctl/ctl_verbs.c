@@ -166,17 +166,48 @@ static void print_problems(const results *res) {
         }
 }
 
+/* A map printed from a scan keeps the map's devices the scan did not find
+ * (switched off, unplugged for service): written over lssd.conf, it would
+ * otherwise drop them from the map without a word. */
+static int add_map_devices_not_found(results *res, const ctl_objects *o, char **ifnames, size_t n) {
+        for (size_t k = 0; k < o->n_devices; k++) {
+                const ctl_device_info *d = &o->devices[k];
+                size_t b = 0;
+                bool seen = false;
+                if (d->mapped_node_id < 1 || d->mapped_node_id > 127)
+                        continue;
+                while (b < n && strcmp(ifnames[b], d->ifname) != 0)
+                        b++;
+                for (size_t i = 0; i < res->n && !seen; i++)
+                        seen = strcmp(res->v[i].ifname, d->ifname) == 0 &&
+                               memcmp(res->v[i].id, d->id, sizeof(d->id)) == 0;
+                if (b == n || seen)
+                        continue;
+                if (results_add(res, ifnames[b], d->id, 0xFF, d->mapped_node_id, NULL, NULL) < 0)
+                        return -ENOMEM;
+                res->v[res->n - 1].kept = true;
+                res->v[res->n - 1].revision_unknown = d->revision_unknown;
+        }
+        return 0;
+}
+
 /* What the replies do not carry, from the Device objects: auto-assign's
  * reply gives a missing device the map's identity, whose revision is 0 when
  * the map has none (RevisionKnown); scan's does not say how each device
- * was found (FoundBy). */
-static void annotate_from_objects(ctl_context *c, results *res, bool scan) {
+ * was found (FoundBy), nor which devices of the map it did not find (for
+ * --as-config, which fails without them rather than print a map short of
+ * them; the table goes without the rest). */
+static int annotate_from_objects(ctl_context *c, results *res, bool scan, char **ifnames, size_t n_buses) {
+        bool keep_map = scan && c->as_config;
         bool any = scan;
         for (size_t i = 0; i < res->n && !any; i++)
                 any = strcmp(res->v[i].outcome, "missing") == 0;
         ctl_objects o = { 0 };
-        if (!any || ctl_objects_load(c, &o) < 0)
-                return;
+        if (!any)
+                return 0;
+        int r = ctl_objects_load(c, &o);
+        if (r < 0)
+                return keep_map ? r : 0;
         for (size_t i = 0; i < res->n; i++)
                 for (size_t k = 0; k < o.n_devices; k++) {
                         const ctl_device_info *d = &o.devices[k];
@@ -189,7 +220,11 @@ static void annotate_from_objects(ctl_context *c, results *res, bool scan) {
                         } else if (strcmp(res->v[i].outcome, "missing") == 0)
                                 res->v[i].revision_unknown = d->revision_unknown;
                 }
+        r = keep_map ? add_map_devices_not_found(res, &o, ifnames, n_buses) : 0;
         ctl_objects_done(&o);
+        if (r < 0)
+                return ctl_fail(c, CTL_EXIT_FAILURE, r, "Out of memory.");
+        return 0;
 }
 
 /* FoundBy as the table shows it: "lss,sdo", "lss", "sdo" or "-" */
@@ -306,37 +341,6 @@ static void print_results(ctl_context *c, const results *res, bool assignments) 
 /* scan --as-config: one device of a map line, 0x%08x as lssd.conf(5) shows them */
 static void print_map_entry(const found *f, bool active, bool comma) {
         ctl_print_map_entry(f->id, !f->revision_unknown, f->new_id, active, comma);
-}
-
-/* A map printed from a scan keeps the map's devices the scan did not find
- * (switched off, unplugged for service): written over lssd.conf, it would
- * otherwise drop them from the map without a word. */
-static int add_map_devices_not_found(ctl_context *c, results *res, char **ifnames, size_t n) {
-        ctl_objects o = { 0 };
-        int r = ctl_objects_load(c, &o);
-        if (r < 0)
-                return r;
-        for (size_t k = 0; k < o.n_devices && r >= 0; k++) {
-                const ctl_device_info *d = &o.devices[k];
-                size_t b = 0;
-                bool seen = false;
-                if (d->mapped_node_id < 1 || d->mapped_node_id > 127)
-                        continue;
-                while (b < n && strcmp(ifnames[b], d->ifname) != 0)
-                        b++;
-                for (size_t i = 0; i < res->n && !seen; i++)
-                        seen = strcmp(res->v[i].ifname, d->ifname) == 0 &&
-                               memcmp(res->v[i].id, d->id, sizeof(d->id)) == 0;
-                if (b == n || seen)
-                        continue;
-                r = results_add(res, ifnames[b], d->id, 0xFF, d->mapped_node_id, NULL, NULL);
-                if (r >= 0) {
-                        res->v[res->n - 1].kept = true;
-                        res->v[res->n - 1].revision_unknown = d->revision_unknown;
-                }
-        }
-        ctl_objects_done(&o);
-        return r;
 }
 
 static int compare_by_node_id(const void *a, const void *b) {
@@ -541,9 +545,8 @@ static int scan_like(ctl_context *c, bool assign) {
                         goto finish;
                 }
         }
-        annotate_from_objects(c, &res, !assign);
-        r = 0;
-        if (c->as_config && (r = add_map_devices_not_found(c, &res, ifnames, n)) < 0)
+        r = annotate_from_objects(c, &res, !assign, ifnames, n);
+        if (r < 0)
                 goto finish;
         if (c->as_config)
                 r = print_config(c, &res, paths, ifnames, n);

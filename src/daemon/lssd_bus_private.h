@@ -12,11 +12,11 @@
 /* Frames read per wake-up before the other buses get their turn. */
 #define RX_BATCH 64u
 /* How long a frame the tx queue refuses is tried again before the running
- * operation fails (a frame takes 0.1..1 ms on the wire). */
-/* A held frame refused this long ends the operation: nobody drains the
- * queue (no other node acknowledges). A queue that drains for other writers
- * too (a busy bus, another program) hands lssd a slot now and then: 100 ms
- * without one was lost to such a writer under load (kvaser-enobufs). */
+ * operation fails: then nobody drains the queue (no other node
+ * acknowledges). A queue that drains for other writers too (a busy bus,
+ * another program) hands lssd a slot now and then, though a frame takes only
+ * 0.1..1 ms on the wire: 100 ms without one was lost to such a writer under
+ * load (kvaser-enobufs). */
 #define LSSD_TX_TIMEOUT_MS 1000u
 
 /* Bus PropertiesChanged bookkeeping. */

@@ -346,6 +346,24 @@ def test_scan_config():
                       'the non-configured device is non-configured again')
             expect(any(f[1] == 0x7E5 for f in frames), 'the auto-assign was on the wire')
 
+        # A map entry whose device is gone while another device answers to
+        # its node-ID: kept, the printed map would give the node-ID twice, so
+        # it is commented out and says why.
+        env.config = ('lss_timeout_ms = @TIMEOUT@;\nbuses = ( { interface = "vcan0"; bitrate = 125000; devices = ( '
+                      '{ vendor = 0xEC; product = 0x1234; serial = 0x9999; node_id = %d; } ); } );\n'
+                      % configured[0].node_id)
+        env.restart_lssd()
+        # lssd publishes a map entry it never saw once an AutoAssign missed it
+        expect_eq(ctl('auto-assign').rc, EXIT['partial'], 'auto-assign with the gone device')
+        out = ctl.ok('scan', '--as-config', '--vendor', '0xEC', '--product', '0x1234').out
+        env.step('lssctl scan --as-config, a map entry gone and its node-ID taken:\n' + out)
+        expect(('# { vendor = 0x000000ec; product = 0x00001234; serial = 0x00009999; node_id = %d; }  # in the map, '
+                "not found by this scan; node-ID %d is another device's now") % ((configured[0].node_id,) * 2) in out,
+               'the gone entry commented out: %r' % out)
+        expect((entry % (configured[0].identity + (configured[0].node_id,))) in out,
+               'the device at that node-ID mapped: %r' % out)
+        check_printed_map(env, out)
+
 
 def test_scan_two_buses():
     a, b = [Slave(0x9A, 3, 1, 0x10)], [Slave(0x9A, 3, 2, 0x20)]
