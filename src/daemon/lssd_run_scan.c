@@ -123,6 +123,31 @@ void lssd_scan_found(lssd_job_env *e, lssd_job *j, const lss_device *f) {
         scan_announce(e, j, f, d);
 }
 
+/* A map entry no known device matches was never seen: a complete Scan asks
+ * for every map entry's vendor and product (and every non-configured
+ * slave), so it is missing. Published as AutoAssign publishes it (LastSeen
+ * 0, no revision when the map has none), so that the absence shows, in
+ * lssctl list and in the map lssctl scan --as-config prints, also where no
+ * AutoAssign ran. */
+static void scan_publish_map_missing(lssd_job_env *e) {
+        for (size_t i = 0; e->config && i < e->config->n_devices; i++) {
+                const lssconf_device *c = &e->config->devices[i];
+                bool known = false;
+                for (const lssd_device *d = e->devices->head; d && !known; d = d->next)
+                        known = lss_identity_matches(&c->identity, c->has_revision, &d->id);
+                if (known)
+                        continue;
+                lssd_device *d = NULL;
+                char ident[40];
+                int k = lssd_devices_get(e->devices, &c->identity, c->has_revision, LSS_NODE_ID_UNCONFIGURED, 0, &d);
+                if (k < 0)
+                        log_error("%s: failed to record missing device %s: %s", e->ifname,
+                                  lssd_identity_format(&c->identity, ident, sizeof(ident)), strerror(-k));
+                else
+                        d->missing = true;
+        }
+}
+
 static void scan_publish(lssd_job_env *e, lssd_job *j, uint64_t now_realtime) {
         /* who was not found although the scan would have */
         if (!j->scan_incomplete)
@@ -143,6 +168,8 @@ static void scan_publish(lssd_job_env *e, lssd_job *j, uint64_t now_realtime) {
                 if (!scan_announced(j, &f->id) || !d || d->node_id != f->node_id || d->found_by != j->found[i].by)
                         (void) scan_record(e, f, j->found[i].by, now_realtime);
         }
+        if (!j->scan_incomplete)
+                scan_publish_map_missing(e);
         lssd_devices_refresh(e->devices);
 
         for (size_t i = 0; i < j->n_found; i++) {
