@@ -138,9 +138,33 @@ static bool choose_target(lss_aa_state *s) {
         return false;
 }
 
+/* The pool node-IDs the non-configured unknown devices in `todo` may take,
+ * to be asked together before they are given out (a batch per wait, as the
+ * mapped ones at the start): asked one at a time, each cost a full timeout
+ * per device, 5 % of a blind pass of 32. */
+static void pool_probe_plan(lss_aa_state *s) {
+        size_t want = 0;
+        s->probe = (lss_probe_state) { .taken = s->taken, .free = s->free };
+        if (s->plan->unknown != LSS_UNKNOWN_POOL)
+                return;
+        for (size_t t = 0; t < s->n_todo; t++)
+                if (s->todo[t].node_id == LSS_NODE_ID_UNCONFIGURED && aa_lookup(s->plan, &s->todo[t].id) < 0 &&
+                    !aa_already_handled(s, &s->todo[t].id))
+                        want++;
+        for (unsigned id = s->plan->pool_lo; want > 0 && id <= s->plan->pool_hi && id <= LSS_NODE_ID_MAX; id++)
+                if (!s->used[id] && !s->taken[id]) {
+                        if (!s->free[id])
+                                s->probe.ids[s->probe.n_ids++] = (uint8_t) id;
+                        want--;
+                }
+}
+
 /* Handle the devices in `todo` (full identities, found by a scan). */
 static int handle_found(lss_master *m, lss_aa_state *s) {
         PT_BEGIN(&s->i_pc);
+        /* again while one answered: the next of the pool takes its place */
+        for (pool_probe_plan(s); s->probe.n_ids > 0; pool_probe_plan(s))
+                PT_CALL(&s->i_pc, proc_probe(m, &s->probe));
         for (s->t = 0; s->t < s->n_todo; s->t++) {
                 if (aa_already_handled(s, &s->todo[s->t].id) || !choose_target(s))
                         continue;

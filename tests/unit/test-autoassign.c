@@ -319,6 +319,57 @@ START_TEST(probe_asks_each_node_id_once) {
 }
 END_TEST
 
+/* Pool node-IDs are asked together, before the first is given out: one
+ * wait for the batch, not a full timeout per device (docs/engine.md,
+ * "Probing node-IDs"). Node-ID 42 answers already: the pool skips it. */
+typedef struct pool_probe_count {
+        unsigned per_node[128], after_configure;
+        bool configured;
+} pool_probe_count;
+
+static void count_pool_probes(void *ud, const lss_frame *f, uint64_t t) {
+        pool_probe_count *c = ud;
+        (void) t;
+        if (lss_is_request(f) && f->data[0] == LSS_CS_CONFIGURE_NODE_ID && f->data[1] >= 40 && f->data[1] <= 50)
+                c->configured = true;
+        if (f->id >= 0x600 + 40 && f->id <= 0x600 + 50) {
+                c->per_node[f->id - 0x600]++;
+                c->after_configure += c->configured;
+        }
+}
+
+START_TEST(pool_probed_together) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(1000, 300);
+        lss_identity there = { 0x9A, 3, 1, 0x42 };
+        membus_add_slave(b, &there, 42, &f);
+        lss_identity ids[8];
+        for (unsigned i = 0; i < 8; i++) {
+                ids[i] = (lss_identity) { 0x9A, 3, 1, 0x500 + i };
+                membus_add_slave(b, &ids[i], 0xFF, &f);
+        }
+        pool_probe_count c = { 0 };
+        membus_set_trace(b, count_pool_probes, &c);
+        lss_autoassign_plan p = { .store = true, .unknown = LSS_UNKNOWN_POOL, .pool_lo = 40, .pool_hi = 50 };
+        lss_master *m = master_default();
+        ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+        bool given[128] = { false };
+        for (unsigned i = 0; i < 8; i++) {
+                const lss_outcome *o = expect_outcome(m, &ids[i], LSS_OUTCOME_POOL);
+                ck_assert(o->new_node_id >= 40 && o->new_node_id <= 50 && o->new_node_id != 42);
+                ck_assert_msg(!given[o->new_node_id], "node-ID %u given twice", o->new_node_id);
+                given[o->new_node_id] = true;
+                ck_assert_int_eq(membus_find(b, &ids[i])->st.active_node_id, o->new_node_id);
+                ck_assert_msg(c.per_node[o->new_node_id] == 1, "node-ID %u asked %u times", o->new_node_id,
+                              c.per_node[o->new_node_id]);
+        }
+        ck_assert_msg(c.after_configure == 0, "%u pool node-IDs asked one at a time", c.after_configure);
+        ck_assert_int_eq(membus_find(b, &there)->st.active_node_id, 42);
+        ck_assert(all_waiting(b));
+        pass_free(m, b);
+}
+END_TEST
+
 /* Every non-configured slave answers the fastscan ping, whatever its
  * identity. With the map's devices all handled, the enumerations for
  * unknown devices (one per vendor and product of the map, then a blind one)
@@ -669,6 +720,7 @@ int main(void) {
         tcase_add_test(tc, probes_together);
         tcase_add_test(tc, probe_asks_each_node_id_once);
         tcase_add_test(tc, one_ping_when_nobody_is_left);
+        tcase_add_test(tc, pool_probed_together);
         tcase_add_test(tc, found_then_silent_is_looked_for_again);
         tcase_add_test(tc, store_lost_is_stored_on_second_look);
         suite_add_tcase(s, tc);
