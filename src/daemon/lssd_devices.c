@@ -19,8 +19,24 @@ void lssd_devices_clear(lssd_devices *ds) {
         }
 }
 
+static uint8_t mapped_node_id(const lssd_devices *ds, const lss_identity *id);
+
 void lssd_devices_set_config(lssd_devices *ds, const lssconf_bus *config) {
         ds->config = config;
+        /* a device known only from a map entry (never seen: LastSeen 0) goes
+         * with the entry; one that was seen stays, unmapped now */
+        for (lssd_device **p = &ds->head; *p;) {
+                lssd_device *d = *p;
+                if (d->last_seen != 0 || mapped_node_id(ds, &d->id) != 0) {
+                        p = &d->next;
+                        continue;
+                }
+                *p = d->next;
+                ds->n--;
+                if (ds->ops && ds->ops->removed)
+                        ds->ops->removed(ds->userdata, d);
+                lssd_device_free(d);
+        }
 }
 
 lssd_device *lssd_devices_find(const lssd_devices *ds, const lss_identity *id) {

@@ -41,7 +41,9 @@ void lssd_devices_init(lssd_devices *ds, lssd_bus *owner, const char *ifname, co
                        void *userdata);
 /* Removes every device (ops->removed for each). */
 void lssd_devices_clear(lssd_devices *ds);
-/* A new map (after a reload or SetBitrate): call lssd_devices_refresh() after. */
+/* A new map (after a reload or SetBitrate): devices known only from an
+ * entry of the old map that is gone (never seen) are removed; call
+ * lssd_devices_refresh() after. */
 void lssd_devices_set_config(lssd_devices *ds, const lssconf_bus *config);
 
 lssd_device *lssd_devices_find(const lssd_devices *ds, const lss_identity *id);

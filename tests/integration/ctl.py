@@ -363,6 +363,17 @@ def test_scan_config():
         expect((entry % (configured[0].identity + (configured[0].node_id,))) in out,
                'the device at that node-ID mapped: %r' % out)
         check_printed_map(env, out)
+        # the entry deleted and reloaded: lssd forgets the device it knew
+        # only from the map, and keeps those it saw
+        listed = [x['serial'] for x in ctl.ok('list', '--json').json]
+        expect(0x9999 in listed, 'the gone entry listed before the reload: %r' % listed)
+        with open(env.config_path, 'w') as f:
+            f.write(env.config_text('lss_timeout_ms = @TIMEOUT@;\nbuses = ( { interface = "vcan0"; '
+                                    'bitrate = 125000; } );\n'))
+        ctl.ok('reload')
+        listed = [x['serial'] for x in ctl.ok('list', '--json').json]
+        expect(0x9999 not in listed and configured[0].serial in listed,
+               'after the entry was deleted and lssd reloaded: %r' % listed)
 
 
 def test_scan_two_buses():

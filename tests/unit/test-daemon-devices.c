@@ -163,6 +163,33 @@ START_TEST(update_publishes_changes) {
 }
 END_TEST
 
+/* A reload drops a device known only from the old map (never seen) when
+ * the new map no longer has it; a device that was seen stays, unmapped. */
+START_TEST(reload_drops_never_seen_entries) {
+        lssd_devices ds;
+        lssconf_bus c, c2;
+        recorder r;
+        lssd_device *a = NULL, *b = NULL;
+        setup(&ds, &r, &c);
+        ck_assert_int_eq(lssd_devices_get(&ds, &A, true, LSS_NODE_ID_UNCONFIGURED, 0, &a), 1); /* never seen */
+        a->missing = true;
+        ck_assert_int_eq(lssd_devices_get(&ds, &B, true, 9, 44, &b), 1);
+        lssd_devices_set_config(&ds, &c); /* the same map: both stay */
+        ck_assert_uint_eq(ds.n, 2);
+        r.log[0] = 0;
+
+        c2 = c;
+        c2.n_devices = 0;
+        lssd_devices_set_config(&ds, &c2);
+        lssd_devices_refresh(&ds);
+        ck_assert_uint_eq(ds.n, 1);
+        ck_assert_ptr_null(lssd_devices_find(&ds, &A));
+        ck_assert_ptr_eq(lssd_devices_find(&ds, &B), b);
+        ck_assert_str_eq(r.log, "-00000100_00000001_00000001_0000000a\n");
+        lssd_devices_clear(&ds);
+}
+END_TEST
+
 START_TEST(remove_and_refuse) {
         lssd_devices ds;
         lssconf_bus c;
@@ -204,6 +231,7 @@ static Suite *suite(void) {
         tcase_add_test(tc, add_find_known);
         tcase_add_test(tc, update_publishes_changes);
         tcase_add_test(tc, remove_and_refuse);
+        tcase_add_test(tc, reload_drops_never_seen_entries);
         suite_add_tcase(s, tc);
         return s;
 }
