@@ -27,7 +27,10 @@ typedef struct found {
         char *outcome, *detail;   /* auto-assign */
         bool revision_unknown;    /* a missing device from a map entry without revision */
         bool by_lss, by_sdo;      /* scan: the device's FoundBy */
-        bool kept;                /* scan --as-config: in the map, not found by this scan */
+        bool kept;                /* scan --as-config: in the map, not found by this scan, or found
+                                   * non-configured (then non_configured): at the map's node-ID */
+        bool non_configured;
+        uint8_t mapped;           /* scan --as-config: the map's node-ID, 0: not in the map */
 } found;
 
 typedef struct results {
@@ -191,6 +194,21 @@ static int add_map_devices_not_found(results *res, const ctl_objects *o, char **
         return 0;
 }
 
+/* found by SDO alone: it did not answer LSS, so lssd cannot give it a node-ID */
+static bool sdo_only(const found *f) {
+        return f->by_sdo && !f->by_lss;
+}
+
+/* --as-config: a device of the map found non-configured goes in at the
+ * map's node-ID (AutoAssign gives it that), as one not found does: as the
+ * bus is, it would lose its entry. */
+static void keep_non_configured(found *f) {
+        if (f->new_id != 0xFF || f->mapped < 1 || f->mapped > 127 || sdo_only(f))
+                return;
+        f->new_id = f->mapped;
+        f->kept = f->non_configured = true;
+}
+
 /* What the replies do not carry, from the Device objects: auto-assign's
  * reply gives a missing device the map's identity, whose revision is 0 when
  * the map has none (RevisionKnown); scan's does not say how each device
@@ -217,6 +235,9 @@ static int annotate_from_objects(ctl_context *c, results *res, bool scan, char *
                         if (scan) {
                                 res->v[i].by_lss = d->found_lss;
                                 res->v[i].by_sdo = d->found_sdo;
+                                res->v[i].mapped = d->mapped_node_id;
+                                if (keep_map)
+                                        keep_non_configured(&res->v[i]);
                         } else if (strcmp(res->v[i].outcome, "missing") == 0)
                                 res->v[i].revision_unknown = d->revision_unknown;
                 }
@@ -231,11 +252,6 @@ static int annotate_from_objects(ctl_context *c, results *res, bool scan, char *
 static const char *found_by_text(const found *f) {
         return f->by_lss && f->by_sdo ? LSSD_FOUND_BY_LSS "," LSSD_FOUND_BY_SDO
                 : f->by_lss ? LSSD_FOUND_BY_LSS : f->by_sdo ? LSSD_FOUND_BY_SDO : "-";
-}
-
-/* found by SDO alone: it did not answer LSS, so lssd cannot give it a node-ID */
-static bool sdo_only(const found *f) {
-        return f->by_sdo && !f->by_lss;
 }
 
 /* scan: the count, and lssd's notes: what the scan did not look for or
@@ -343,6 +359,11 @@ static void print_map_entry(const found *f, bool active, bool comma) {
         ctl_print_map_entry(f->id, !f->revision_unknown, f->new_id, active, comma);
 }
 
+/* a device of the map found at another node-ID than the map's */
+static bool map_moved(const found *f) {
+        return f->mapped >= 1 && f->mapped <= 127 && f->mapped != f->new_id;
+}
+
 static int compare_by_node_id(const void *a, const void *b) {
         const found *x = *(const found *const *) a, *y = *(const found *const *) b;
         if (x->new_id != y->new_id)
@@ -355,7 +376,7 @@ static int compare_by_node_id(const void *a, const void *b) {
  * theirs; what cannot be one commented out. */
 static int print_config(ctl_context *c, const results *res, char **paths, char **ifnames, size_t n) {
         const found **v = calloc(res->n ? res->n : 1, sizeof(*v));
-        size_t mapped = 0, kept = 0, left_out = 0;
+        size_t mapped = 0, kept = 0, waiting = 0, left_out = 0, moved = 0;
         char when[64] = "";
         time_t now = time(NULL);
         struct tm tm;
@@ -378,8 +399,10 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
                             (f->kept || !res->v[k].kept))
                                 ok[i] = false;
                 mapped += ok[i] && !f->kept;
-                kept += ok[i] && f->kept;
+                kept += ok[i] && f->kept && !f->non_configured;
+                waiting += ok[i] && f->non_configured;
                 left_out += !ok[i];
+                moved += ok[i] && !f->kept && map_moved(f);
         }
         if (gmtime_r(&now, &tm))
                 strftime(when, sizeof(when), "%Y-%m-%d %H:%M:%S UTC", &tm);
@@ -387,8 +410,12 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
         printf("# lssd.conf(5) buses as found by 'lssctl scan --as-config', %s, lssctl %s:\n", when, LSSCTL_VERSION);
         printf("# %zu device%s mapped at %s current node-ID%s", mapped, mapped == 1 ? "" : "s",
                mapped == 1 ? "its" : "their", mapped == 1 ? "" : "s");
+        if (moved > 0)
+                printf(" (%zu of them not at the map's node-ID: see there)", moved);
         if (kept > 0)
                 printf(", %zu kept from the map (not found)", kept);
+        if (waiting > 0)
+                printf(", %zu non-configured at the map's node-ID%s", waiting, waiting == 1 ? "" : "s");
         if (left_out > 0)
                 printf(", %zu commented out (see there)", left_out);
         printf(", on");
@@ -426,14 +453,22 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
                         const found *f = v[i];
                         if (ok[f - res->v]) {
                                 print_map_entry(f, true, i < last);
-                                if (f->kept)
+                                if (f->non_configured)
+                                        printf("  # non-configured now: at the map's node-ID, which AutoAssign "
+                                               "gives it");
+                                else if (f->kept)
                                         printf("  # in the map, not found by this scan: kept (delete the line if "
                                                "the device is gone)");
+                                else if (map_moved(f))
+                                        printf("  # the map has node-ID %u: this is the node-ID it has now", f->mapped);
                                 putchar('\n');
                                 continue;
                         }
                         print_map_entry(f, false, false);
-                        if (f->kept)
+                        if (f->non_configured)
+                                printf("  # non-configured now; the map's node-ID %u is another device's now\n",
+                                       f->new_id);
+                        else if (f->kept)
                                 printf("  # in the map, not found by this scan; node-ID %u is another device's now\n",
                                        f->new_id);
                         else if (sdo_only(f))

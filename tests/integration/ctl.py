@@ -375,6 +375,28 @@ def test_scan_config():
         expect(0x9999 not in listed and configured[0].serial in listed,
                'after the entry was deleted and lssd reloaded: %r' % listed)
 
+        # The map's devices as the bus has them now: one non-configured
+        # keeps its entry at the map's node-ID (as the bus is, it would lose
+        # it); one at another node-ID than the map's is mapped where it is,
+        # and the line says what the map had.
+        env.config = ('lss_timeout_ms = @TIMEOUT@;\nbuses = ( { interface = "vcan0"; bitrate = 125000; devices = ( '
+                      '{ vendor = 0xEC; product = 0x1234; revision = 0x%x; serial = 0x%x; node_id = 20; }, '
+                      '{ vendor = 0xEC; product = 0x1234; revision = 0x%x; serial = 0x%x; node_id = 16; } ); } );\n'
+                      % (fresh.identity[2], fresh.serial, configured[1].identity[2], configured[1].serial))
+        env.restart_lssd()
+        out = ctl.ok('scan', '--as-config', '--vendor', '0xEC', '--product', '0x1234').out
+        env.step('lssctl scan --as-config, a mapped device non-configured, one at another node-ID:\n' + out)
+        lines = [x.strip() for x in out.splitlines()]
+        expect(any(x.startswith(entry % (fresh.identity + (20,))) and
+                   x.endswith("# non-configured now: at the map's node-ID, which AutoAssign gives it") for x in lines),
+               'the non-configured device at its map node-ID: %r' % out)
+        expect(any(x.startswith(entry % (configured[1].identity + (configured[1].node_id,))) and
+                   x.endswith('# the map has node-ID 16: this is the node-ID it has now') for x in lines),
+               'the device at another node-ID than the map\'s: %r' % out)
+        expect(("# 3 devices mapped at their current node-IDs (1 of them not at the map's node-ID: see there), "
+                "1 non-configured at the map's node-ID") in out, 'header counts: %r' % out)
+        check_printed_map(env, out)
+
 
 def test_scan_two_buses():
     a, b = [Slave(0x9A, 3, 1, 0x10)], [Slave(0x9A, 3, 2, 0x20)]
