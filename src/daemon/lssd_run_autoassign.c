@@ -112,6 +112,14 @@ static const char *outcome_name(const lss_outcome *o) {
         return lss_outcome_name(o->kind);
 }
 
+/* The map entry's node-ID of an outcome, 0 when the map has none. */
+static unsigned map_node_id(const lssd_job *j, const lss_outcome *o) {
+        for (size_t i = 0; i < j->plan.n_map; i++)
+                if (lss_map_entry_matches(&j->plan.map[i], &o->id))
+                        return j->plan.map[i].node_id;
+        return 0;
+}
+
 static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_outcome *o) {
         char ident[40], detail[200];
         int priority = LOG_INFO;
@@ -133,9 +141,15 @@ static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_out
                 break;
         }
         outcome_detail(o, detail, sizeof(detail));
-        lssd_log_device(priority, e->ifname, &o->id, o->new_node_id, "%s: AutoAssign: device %s %s, node-ID %u -> %u%s%s",
-                        e->ifname, ident, outcome_name(o), o->old_node_id, o->new_node_id,
-                        !detail[0] ? "" : o->not_stored && o->kind != LSS_OUTCOME_REPLACED ? ", " : ": ", detail);
+        const char *sep = !detail[0] ? "" : o->not_stored && o->kind != LSS_OUTCOME_REPLACED ? ", " : ": ";
+        if (o->kind == LSS_OUTCOME_MISSING) /* it has no node-ID here: the map's says which device */
+                lssd_log_device(priority, e->ifname, &o->id, o->new_node_id,
+                                "%s: AutoAssign: device %s missing, map node-ID %u%s%s", e->ifname, ident,
+                                map_node_id(j, o), sep, detail);
+        else
+                lssd_log_device(priority, e->ifname, &o->id, o->new_node_id,
+                                "%s: AutoAssign: device %s %s, node-ID %u -> %u%s%s", e->ifname, ident,
+                                outcome_name(o), o->old_node_id, o->new_node_id, sep, detail);
         if (o->kind == LSS_OUTCOME_REPLACED && !o->dry) {
                 char old[40];
                 lssd_log_device(LOG_NOTICE, e->ifname, &o->id, o->new_node_id,

@@ -662,7 +662,7 @@ def test_auto_assign_partial():
                'the missing device in the table: %r' % r.out)
         expect('does not match the map: 1 mapped device missing' in r.err, 'the verdict on stderr: %r' % r.err)
         expect_eq(r.out.strip().splitlines()[-1], '1 node-ID assigned, 1 unchanged, 1 missing.', 'the count')
-        expect('device 0000009a:00000003:-:00000011 missing' in env.lssd_output(), 'the journal line of the '
+        expect('device 0000009a:00000003:-:00000011 missing, map node-ID 7' in env.lssd_output(), 'the journal line of the '
                'missing device: %r' % [x for x in env.lssd_output().splitlines() if 'missing' in x])
         r = ctl('auto-assign', '--json')
         expect_eq(r.rc, EXIT['partial'], 'exit status of a partial pass with --json')
