@@ -422,7 +422,8 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
         for (size_t b = 0; b < n; b++)
                 printf("%s %s", b == 0 ? "" : ",", ifnames[b]);
         printf(".\n"
-               "# It replaces the buses = ( ... ); of /etc/lssd/lssd.conf, or extends it by\n"
+               "# It replaces the buses = ( ... ); of lssd's configuration file (lssd.conf(5):\n"
+               "# /etc/lssd/lssd.conf unless lssd runs with --config), or extends it by\n"
                "# the groups of the buses not there yet; the global settings there stay.\n"
                "# Bus settings lssd does not publish (store, unknown, pool, nmt_stop,\n"
                "# bitrate_change, vendor, product) are not here: copy them from the old file.\n"
