@@ -39,6 +39,7 @@ typedef struct results {
         bool partial;             /* auto-assign: some bus does not match its map */
         char **notes;             /* scan: "<ifname>: <note>", what lssd did not look for or identify */
         size_t n_notes;
+        size_t n_map_missing;     /* scan: the map's devices it did not find (Device objects "missing") */
 } results;
 
 static int results_add_note(results *res, const char *ifname, const char *note) {
@@ -241,6 +242,11 @@ static int annotate_from_objects(ctl_context *c, results *res, bool scan, char *
                         } else if (strcmp(res->v[i].outcome, "missing") == 0)
                                 res->v[i].revision_unknown = d->revision_unknown;
                 }
+        for (size_t k = 0; scan && k < o.n_devices; k++)
+                for (size_t b = 0; b < n_buses; b++)
+                        res->n_map_missing += strcmp(o.devices[k].ifname, ifnames[b]) == 0 &&
+                                              o.devices[k].mapped_node_id != 0 &&
+                                              strcmp(o.devices[k].state, "missing") == 0;
         r = keep_map ? add_map_devices_not_found(res, &o, ifnames, n_buses) : 0;
         ctl_objects_done(&o);
         if (r < 0)
@@ -264,6 +270,9 @@ static void print_scan_legend(const results *res) {
         if (only > 0)
                 printf(", %zu by SDO only (no LSS answer: lssd cannot assign %s)", only, only == 1 ? "it" : "them");
         printf(".\n");
+        if (res->n_map_missing > 0)
+                printf("%zu device%s of the map not found (missing): 'lssctl list' shows %s.\n", res->n_map_missing,
+                       res->n_map_missing == 1 ? "" : "s", res->n_map_missing == 1 ? "it" : "them");
         for (size_t i = 0; i < res->n_notes; i++)
                 printf("Note: %s.\n", res->notes[i]);
 }

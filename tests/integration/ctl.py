@@ -677,6 +677,10 @@ def test_auto_assign_partial():
                'the missing device in list: %r' % out)
         got = [(x['serial'], x['revision_known']) for x in ctl.ok('list', '--json').json]
         expect((17, False) in got and all(k for s, k in got if s != 17), 'revision_known in list --json: %r' % got)
+        # scan says the map has a device it did not find
+        out = ctl.ok('scan').out
+        expect("1 device of the map not found (missing): 'lssctl list' shows it." in out,
+               'scan names the missing count: %r' % out)
         # A map printed from a scan keeps the map's device it did not find
         # (written over lssd.conf, it would drop it without a word): at the
         # map's node-ID, without the revision the map does not have.
