@@ -76,6 +76,8 @@ def one_setup(mode, n, rep, buses, parallel):
             time.sleep(0.2)  # lssd's start-up switch to waiting is not part of the run
             replies, times, errors = {}, {}, {}
             cpu0 = bl.proc_cpu_s(env.lssd.pid)
+            sims0 = sum(bl.proc_cpu_s(p.pid) for p in env.sims.values())
+            sys0 = bl.system_cpu()
             w0 = time.time()
 
             def call(b, t0):
@@ -100,6 +102,11 @@ def one_setup(mode, n, rep, buses, parallel):
                 total = sum(times.values())
             w1 = time.time()
             cpu = bl.proc_cpu_s(env.lssd.pid) - cpu0
+            # where the VM's CPUs went meanwhile: lssd, the lss-sims (the
+            # slaves), the rest (candump, this harness, the kernel)
+            sims = sum(bl.proc_cpu_s(p.pid) for p in env.sims.values()) - sims0
+            sys1 = bl.system_cpu()
+            busy = (sys1[0] - sys0[0]) / max(1, sys1[1] - sys0[1])
             if errors:
                 raise bl.BenchFailure('%s: AutoAssign failed: %r' % (who, errors))
             time.sleep(0.3)  # let candump write the last frames
@@ -113,7 +120,8 @@ def one_setup(mode, n, rep, buses, parallel):
                                                         % (kind, mode, n, rep)))
             engine = [line.split('engine: ', 1)[1] for line in env.lssd_output().splitlines()
                       if 'AutoAssign finished' in line and 'engine: ' in line]
-            return {'bus_s': [times[b] for b in buses], 'total_s': total, 'cpu_s': cpu,
+            return {'bus_s': [times[b] for b in buses], 'total_s': total, 'cpu_s': cpu, 'sims_cpu_s': sims,
+                    'cpus_busy': busy,
                     'frames': [f['frames'] for f in frames], 'floor_s': [f['floor_s'] for f in frames],
                     'engine': engine}
         except bl.BenchFailure:

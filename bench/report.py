@@ -237,9 +237,9 @@ def main():
         print()
         print('## Buses in parallel: AutoAssign on %d vcan buses at once vs each bus alone (VM; one lssd with the %d '
               'buses, one lss-sim per bus, N slaves per bus)' % (nb, nb))
-        print('%-31s %5s %4s %-26s %-26s %7s %-27s %-27s %s' % (
+        print('%-31s %5s %4s %-26s %-26s %7s %-27s %-27s %-22s %s' % (
             'case', 'N/bus', 'reps', 'slowest alone s: median', 'all at once s: median', 'ratio',
-            'alone per bus s (rep 0)', 'at once per bus s (rep 0)', 'results'))
+            'alone per bus s (rep 0)', 'at once per bus s (rep 0)', 'at once: CPUs lssd sims', 'results'))
         for mode in ORDER:
             for n in sorted({k[1] for k in par}):
                 c = par.get((mode, n))
@@ -252,15 +252,20 @@ def main():
                 ratio = bl.summary([r['ratio'] for r in runs])
                 par_ratio[(mode, n)] = ratio['median']
                 r0 = runs[0]
-                print('%-31s %5d %4d %-26s %-26s %6.2fx %-27s %-27s %s' % (
+                p0 = r0['parallel']
+                load = ('%3.0f%% %5.2f %5.2f' % (100 * p0['cpus_busy'], p0['cpu_s'], p0['sims_cpu_s'])
+                        if 'cpus_busy' in p0 else '-')
+                print('%-31s %5d %4d %-26s %-26s %6.2fx %-27s %-27s %-22s %s' % (
                     LABEL[mode], n, len(runs), fmt_spread(med(runs, 'slowest_alone_s')),
                     fmt_spread(med(runs, 'parallel_s')), ratio['median'],
                     '/'.join('%.2f' % t for t in r0['alone']['bus_s']),
-                    '/'.join('%.2f' % t for t in r0['parallel']['bus_s']), right))
+                    '/'.join('%.2f' % t for t in p0['bus_s']), load, right))
         print('# alone: AutoAssign on one bus after the other (fresh slaves), each call timed; at once: one call per '
               'bus, sent together, timed to the last reply;')
         print('# ratio = at once / slowest alone (target: about 1x); results: every slave of every bus at its node-ID '
               '(reply and state files)')
+        print('# at once (rep 0): how busy the VM\'s CPUs were (all of them, /proc/stat), and the CPU seconds of lssd '
+              'and of the lss-sims (the slaves) meanwhile; the rest: candump, the harness, the kernel')
 
     # ---- targets ----
     print()
