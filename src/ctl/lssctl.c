@@ -65,7 +65,7 @@ static void help(void) {
                "Commands:\n"
                "  status                   Buses, their state, running job, device counts (default)\n"
                "  list                     Devices lssd knows: identity, node-ID, state, last seen\n"
-               "  scan                     Find every LSS slave (fastscan and slowscan)\n"
+               "  scan                     Find every device (LSS; SDO 1018h for configured ones)\n"
                "  assign SERIAL|VENDOR:PRODUCT:REVISION:SERIAL NODEID\n"
                "                           Give one device a node-ID (1..127)\n"
                "  unassign SERIAL|VENDOR:PRODUCT:REVISION:SERIAL\n"

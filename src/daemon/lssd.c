@@ -181,7 +181,8 @@ static int check_config(lssd_context *ctx) {
                 fprintf(stderr, "(%zu more messages)\n", diag.n_dropped);
         lssconf_diag_clear(&diag);
         if (r < 0) {
-                fprintf(stderr, "Configuration is bad.\n");
+                fprintf(stderr, "Configuration %s is bad.\n",
+                        ctx->args.config_path ? ctx->args.config_path : LSSD_DEFAULT_CONFIG);
                 return r;
         }
         if (!c->source && c->n_buses == 0) {

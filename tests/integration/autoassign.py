@@ -607,6 +607,8 @@ def test_bad_config():
                                  capture_output=True, text=True, timeout=60)
             expect_eq(chk.returncode, 1, '--check-config %s exit status' % name)
             expect(file_line(path, chk.stderr), '--check-config %s names file:line: %r' % (name, chk.stderr[-500:]))
+            expect(chk.stderr.rstrip().endswith('Configuration %s is bad.' % path),
+                   '--check-config %s ends naming the file: %r' % (name, chk.stderr[-200:]))
             start = subprocess.run(unit_exec_start(path), capture_output=True, text=True, timeout=60,
                                    env=dict(os.environ, DBUS_SYSTEM_BUS_ADDRESS=env.address))
             expect_eq(start.returncode, 78, 'lssd exit status with the %s file (EX_CONFIG: no restart loop)' % name)
