@@ -29,15 +29,19 @@ static bool autoassign_mark_missing(lssd_job_env *e, const lssd_job *j, const ls
         return marked;
 }
 
+/* The map entry naming an outcome's device, NULL when the map has none. */
+static const lss_map_entry *outcome_map_entry(const lssd_job *j, const lss_outcome *o) {
+        for (size_t i = 0; i < j->plan.n_map; i++)
+                if (lss_map_entry_matches(&j->plan.map[i], &o->id))
+                        return &j->plan.map[i];
+        return NULL;
+}
+
 /* A missing device's identity is the map's: without a revision there, its
  * revision (0) is not known. */
 static bool outcome_revision_known(const lssd_job *j, const lss_outcome *o) {
-        if (o->kind != LSS_OUTCOME_MISSING)
-                return true;
-        for (size_t i = 0; i < j->plan.n_map; i++)
-                if (lss_map_entry_matches(&j->plan.map[i], &o->id))
-                        return j->plan.map[i].revision_known;
-        return true;
+        const lss_map_entry *m = o->kind == LSS_OUTCOME_MISSING ? outcome_map_entry(j, o) : NULL;
+        return !m || m->revision_known;
 }
 
 /* Brings the Device object of one outcome up to date. */
@@ -112,14 +116,6 @@ static const char *outcome_name(const lss_outcome *o) {
         return lss_outcome_name(o->kind);
 }
 
-/* The map entry's node-ID of an outcome, 0 when the map has none. */
-static unsigned map_node_id(const lssd_job *j, const lss_outcome *o) {
-        for (size_t i = 0; i < j->plan.n_map; i++)
-                if (lss_map_entry_matches(&j->plan.map[i], &o->id))
-                        return j->plan.map[i].node_id;
-        return 0;
-}
-
 static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_outcome *o) {
         char ident[40], detail[200];
         int priority = LOG_INFO;
@@ -142,10 +138,11 @@ static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_out
         }
         outcome_detail(o, detail, sizeof(detail));
         const char *sep = !detail[0] ? "" : o->not_stored && o->kind != LSS_OUTCOME_REPLACED ? ", " : ": ";
+        const lss_map_entry *m = outcome_map_entry(j, o);
         if (o->kind == LSS_OUTCOME_MISSING) /* it has no node-ID here: the map's says which device */
                 lssd_log_device(priority, e->ifname, &o->id, o->new_node_id,
                                 "%s: AutoAssign: device %s missing, map node-ID %u%s%s", e->ifname, ident,
-                                map_node_id(j, o), sep, detail);
+                                m ? m->node_id : 0u, sep, detail);
         else
                 lssd_log_device(priority, e->ifname, &o->id, o->new_node_id,
                                 "%s: AutoAssign: device %s %s, node-ID %u -> %u%s%s", e->ifname, ident,
