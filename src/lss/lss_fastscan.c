@@ -8,8 +8,9 @@
  * so far confirmed directly; if such a field fails too, everything is scanned
  * again. A guess (vendor, product, revision of the last find) is confirmed
  * directly before a field is scanned; scanned when nobody confirms it.
- * Nothing is reported found unless all four confirmations succeeded;
- * callers check the identity again by inquiry before configuring anything. */
+ * Nothing is reported found unless all four confirmations succeeded (a
+ * late answer counts, below); callers check the identity again by inquiry
+ * before configuring anything. */
 #include "lss/lss_internal.h"
 
 /* Every answered step narrows the slaves taking part to those that answered
@@ -35,11 +36,27 @@ static void judge_lone(lss_master *m, lss_fastscan_state *s) {
         s->strays = m->stats.stray_answers;
 }
 
-/* `unguarded`: the step may end at its answer when one slave alone takes part */
+/* `unguarded`: the step may end at its answer when one slave alone takes
+ * part. A bit step after a silent one watches for an early answer (below). */
 #define FASTSCAN_STEP(m, s, frame_expr, unguarded) \
         do { lss_frame f__; frame_expr; step_lss(m, LSS_CS_IDENTIFY_SLAVE); step_add_tx(m, &f__); \
-             m->step.ends_at_answer = (s)->lone && (unguarded); step_start(m); PT_YIELD(&(s)->pc); \
-             judge_lone(m, s); } while (0)
+             m->step.ends_at_answer = (s)->lone && (unguarded); \
+             m->step.watch_early = (s)->watch_next; (s)->watch_next = false; \
+             step_start(m); PT_YIELD(&(s)->pc); \
+             judge_lone(m, s); (s)->before_sent_us = (s)->sent_us; \
+             (s)->sent_us = m->step.sent_at + m->step.tx_us; (s)->after = AFTER_ANSWER; } while (0)
+
+/* An answer too soon to be a step's own (lss_step.early), or one before its
+ * request was out (lss_step.stale_answer), right after a silent step is most
+ * likely that step's, late: taken for the next step's it reads a bit wrong
+ * and a field nobody confirms follows. So a silent bit step is asked again;
+ * a silent confirmation has moved the slaves on and is taken as confirmed
+ * (docs/engine.md, "An early answer after a silence"). This is the late
+ * answer's latency from its own request. */
+static uint32_t late_latency(const lss_master *m, const lss_fastscan_state *s) {
+        uint64_t l = m->step.first_at > s->before_sent_us ? m->step.first_at - s->before_sent_us : 0;
+        return l > UINT32_MAX ? UINT32_MAX : (uint32_t) l;
+}
 
 static uint32_t known_prefix(const lss_fastscan_known *k, unsigned sub) {
         unsigned n = k->known_bits[sub];
@@ -57,6 +74,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                 /* from this ping on: signs of other slaves from before say nothing */
                 s->lone = false;
                 s->strays = m->stats.stray_answers;
+                s->after = AFTER_ANSWER;
                 m->final_repeated = false;
                 step_lss(m, LSS_CS_IDENTIFY_SLAVE);
                 m->step.discovery = true;
@@ -111,17 +129,56 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                         continue;
                                         }
                                         for (s->bit = 31 - s->known.known_bits[s->sub]; s->bit >= 0; s->bit--) {
+                                                s->early_after = s->after;
+                                                s->watch_next = s->after != AFTER_ANSWER;
                                                 FASTSCAN_STEP(m, s,
                                                              lss_encode_fastscan(&f__, s->value[s->sub],
                                                                                  (uint8_t) s->bit, (uint8_t) s->sub,
                                                                                  (uint8_t) s->sub), s->bit > 0);
-                                                if (!step_answered(m))
+                                                s->bit_answered = step_answered(m);
+                                                s->late_before = m->step.stale_answer ||
+                                                                 (s->bit_answered && m->step.early);
+                                                if (s->late_before && s->early_after == AFTER_SILENT_CONFIRM) {
+                                                        /* the confirmation's late answer: confirmed */
+                                                        m->stats.late_answers++;
+                                                        if (m->step.early)
+                                                                step_sample(m, late_latency(m, s));
+                                                        s->value[s->sub] = s->confirm_value;
+                                                        s->late_confirmed = true;
+                                                        break;
+                                                }
+                                                if (s->late_before && s->early_after == AFTER_SILENT_BIT) {
+                                                        s->early_latency_us = m->step.early ? m->step.latency_us : 0;
+                                                        s->late_latency_us = m->step.early ? late_latency(m, s) : 0;
+                                                        FASTSCAN_STEP(m, s,
+                                                                     lss_encode_fastscan(&f__,
+                                                                                         s->value[s->sub] & ~(1u << (s->bit + 1)),
+                                                                                         (uint8_t) (s->bit + 1), (uint8_t) s->sub,
+                                                                                         (uint8_t) s->sub), false);
+                                                        if (step_answered(m)) {
+                                                                /* it was the silent step's: its bit is 0 */
+                                                                m->stats.late_answers++;
+                                                                if (s->late_latency_us)
+                                                                        step_sample(m, s->late_latency_us);
+                                                                s->value[s->sub] &= ~(1u << (s->bit + 1));
+                                                                s->bit++; /* this bit is asked again */
+                                                                continue;
+                                                        }
+                                                        /* the early answer was this bit's own */
+                                                        if (s->early_latency_us)
+                                                                step_sample(m, s->early_latency_us);
+                                                }
+                                                if (!s->bit_answered) {
                                                         s->value[s->sub] |= 1u << s->bit;
+                                                        s->after = AFTER_SILENT_BIT;
+                                                }
                                                 if (m->cancelling)
                                                         goto out;
                                                 master_progress(m, (s->sub * 33.0 + (32 - s->bit)) / 133.0);
                                         }
                                 }
+                                if (s->late_confirmed)
+                                        break;
                                 FASTSCAN_STEP(m, s,
                                              lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
                                                                  (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false);
@@ -130,6 +187,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 /* Nobody matched, so the slaves still expect this
                                  * field: scan it again without a new ping. */
                                 m->stats.retries++;
+                                s->after = AFTER_SILENT_CONFIRM;
+                                s->confirm_value = s->value[s->sub];
                                 s->lone_failed = s->lone_failed || s->lone;
                                 s->lone = false;
                                 if (s->known.known_bits[s->sub] >= 32 && s->sub >= s->confirmed &&
@@ -142,8 +201,9 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 if (s->field_try >= m->timing.cfg.retries || s->sub < s->confirmed)
                                         break;
                         }
-                        if (!step_answered(m))
+                        if (!step_answered(m) && !s->late_confirmed)
                                 break;
+                        s->late_confirmed = false;
                 }
                 if (s->sub == LSS_FIELD_COUNT) {
                         s->found = true;

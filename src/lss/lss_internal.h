@@ -48,6 +48,7 @@ typedef struct lss_step {
         uint32_t late_us;      /* nonzero: this step's late guard instead of the rule's */
         bool ends_at_answer;   /* the first answer is the only one that can come (or all
                                 * are the same): no answer guard (lss_step.c) */
+        bool watch_early;      /* a step after one nobody answered: judge `early` */
 
         enum step_phase phase;
         uint64_t sent_at, tx_us, first_at, end_at;
@@ -59,6 +60,12 @@ typedef struct lss_step {
         lss_frame answer;      /* the first */
         lss_frame other;       /* the first answer different from `answer` */
         bool late;             /* answered inside the late guard */
+        bool early;            /* (watch_early) the first answer came sooner than any slave
+                                * answers: maybe the step before's, late; its latency is
+                                * not sampled (the caller decides, step_sample_early) */
+        uint32_t latency_us;   /* of the first answer */
+        bool stale_answer;     /* (watch_early) an answer it asks for came before its
+                                * request was out: the step before's, late */
         bool void_;            /* frames were lost meanwhile: do not trust */
         bool needs_echo;       /* tx confirmation was on when the step began */
         bool written;          /* on_sent() came: the request was handed to the transport */
@@ -90,6 +97,14 @@ typedef struct lss_fastscan_state {
         bool lone;                 /* one slave alone answered a step: only it takes part now */
         bool lone_failed;          /* a field read while lone was not confirmed */
         uint64_t strays;           /* stats.stray_answers when lone was last judged */
+        enum { AFTER_ANSWER, AFTER_SILENT_BIT, AFTER_SILENT_CONFIRM } after; /* the step before */
+        uint64_t sent_us, before_sent_us; /* end of the request on the wire: this step, the one before */
+        int early_after;           /* `after` of the bit step being asked */
+        bool watch_next;           /* the next step judges an early answer */
+        uint32_t confirm_value;    /* of the confirmation nobody answered */
+        bool late_confirmed;       /* ... whose answer came early in the next step */
+        bool late_before, bit_answered; /* the bit step just asked */
+        uint32_t early_latency_us, late_latency_us; /* an early answer: as the next step's, as the one before's */
 } lss_fastscan_state;
 
 typedef struct lss_assign_state {
@@ -264,6 +279,8 @@ static inline void note_patience(lss_master *m) {
 void step_on_time(lss_master *m, uint64_t now);
 uint64_t step_deadline(const lss_master *m);
 bool step_answered(const lss_master *m);
+/* An answer's latency measured after its step ended (lss_step.early): into the window */
+void step_sample(lss_master *m, uint32_t latency_us);
 bool step_conflict(const lss_master *m);
 
 /* Start a one-frame confirmed/unconfirmed LSS step and return from the coroutine until it is done. */

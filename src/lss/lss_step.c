@@ -151,6 +151,9 @@ void step_on_stray(lss_master *m, const lss_frame *f) {
                 m->final_repeated = true;
                 return;
         }
+        /* before this step's request was out: the step before's, late */
+        if (m->step.watch_early && step_matches(&m->step, f))
+                m->step.stale_answer = true;
         m->stats.stray_answers++;
         lss_timing_on_stray(&m->timing);
         note_patience(m);
@@ -200,9 +203,14 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                 /* (an rx time may read a little before the echo's: count 0) */
                 if (s->kind == STEP_LSS) {
                         uint32_t latency = rx > s->sent_at + s->tx_us ? (uint32_t) (rx - s->sent_at - s->tx_us) : 0;
-                        lss_timing_add_sample(&m->timing, latency);
-                        lss_timing_on_answer(&m->timing, latency, s->phase == PHASE_LATE_GUARD && s->discovery);
-                        note_patience(m);
+                        s->latency_us = latency;
+                        s->early = s->watch_early && lss_timing_early(&m->timing, latency);
+                        if (!s->early) {
+                                lss_timing_add_sample(&m->timing, latency);
+                                lss_timing_on_answer(&m->timing, latency,
+                                                     s->phase == PHASE_LATE_GUARD && s->discovery);
+                                note_patience(m);
+                        }
                 }
                 s->answer = *f;
                 s->n_answers = 1;
@@ -289,6 +297,12 @@ void step_on_time(lss_master *m, uint64_t now) {
         default:
                 return;
         }
+}
+
+void step_sample(lss_master *m, uint32_t latency_us) {
+        lss_timing_add_sample(&m->timing, latency_us);
+        lss_timing_on_answer(&m->timing, latency_us, false);
+        note_patience(m);
 }
 
 bool step_answered(const lss_master *m) {

@@ -116,6 +116,21 @@ uint32_t lss_timing_answer_guard(const lss_timing *t) {
         return g + answer_frame_us(t);
 }
 
+/* Latency counts to the end of the answer on the wire, so an answer that
+ * waited behind the request (a late one) arrives one frame time after it:
+ * what is compared is a latency without that frame (111 bits without stuff
+ * bits), the slave's own part. Stuff bits leave up to 24 bit times of it
+ * unknown: slaves faster than twice that (no latency of their own to speak
+ * of) have no early answers. On vcan the frame time is 0. */
+bool lss_timing_early(const lss_timing *t, uint32_t latency_us) {
+        if (t->n_samples < LSS_EARLY_MIN_SAMPLES)
+                return false;
+        int64_t frame = t->cfg.bitrate ? 111ll * 1000000 / t->cfg.bitrate : 0;
+        int64_t slack = t->cfg.bitrate ? 24ll * 1000000 / t->cfg.bitrate : 0;
+        int64_t own = (int64_t) latency_us - frame, fastest = (int64_t) lss_timing_min(t) - frame;
+        return fastest > 2 * slack && own * 2 < fastest;
+}
+
 uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery) {
         /* patience lengthens the wait, not this */
         uint32_t g = wait_up_to(t, discovery, false) / 4;

@@ -34,6 +34,7 @@
 #define LSS_LATENCY_WINDOW 32
 #define LSS_PATIENCE_MAX_US 1000000u
 #define LSS_PATIENCE_FACTOR 4u
+#define LSS_EARLY_MIN_SAMPLES 8u
 
 typedef struct lss_timing {
         lss_timing_config cfg;
@@ -47,6 +48,11 @@ void lss_timing_init(lss_timing *t, const lss_timing_config *cfg);
 void lss_timing_add_sample(lss_timing *t, uint32_t latency_us);
 uint32_t lss_timing_max(const lss_timing *t);
 uint32_t lss_timing_min(const lss_timing *t);
+/* Sooner than half the fastest answer of the window (once it holds
+ * LSS_EARLY_MIN_SAMPLES; both without the answer's frame time): too soon
+ * to be a slave's answer to the request just sent, as far as this bus has
+ * shown. */
+bool lss_timing_early(const lss_timing *t, uint32_t latency_us);
 /* The longest no-answer wait now: the timeout, or the patience if longer. */
 uint32_t lss_timing_limit(const lss_timing *t);
 /* A step's first answer came `latency_us` after its request: `late` when it

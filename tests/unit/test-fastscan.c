@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* Fastscan and enumeration of non-configured slaves: many slaves, known
  * fields, fault knobs, late and duplicated answers. */
+#include <stdio.h>
+
 #include "engine-util.h"
 
 
@@ -168,6 +170,103 @@ START_TEST(lone_slave_bits_end_at_answer) {
                       g.answers, zeros);
         lss_master_free(m);
         membus_free(b);
+}
+END_TEST
+
+/* Answers that waited behind a request on the wire: at 125 kbit/s they
+ * arrive one frame time (~0.95 ms) after it, a slave's own answer a frame
+ * time plus the slave's latency (1 ms here). */
+typedef struct queued_answers {
+        uint64_t request_at;
+        unsigned queued;
+} queued_answers;
+
+static void count_queued(void *ud, const lss_frame *f, uint64_t t) {
+        queued_answers *q = ud;
+        if (lss_is_request(f))
+                q->request_at = t;
+        else if (lss_is_response(f) && q->request_at && t - q->request_at < 1200)
+                q->queued++;
+}
+
+/* One fastscan of the bus's one slave (the bus is freed): a result is always
+ * its identity. */
+typedef struct late_run {
+        bool ok;
+        unsigned requests, retries, queued;
+        char message[sizeof(((lss_result *) 0)->message)];
+} late_run;
+
+static late_run fastscan_once(membus *b) {
+        queued_answers q = { 0 };
+        membus_set_trace(b, count_queued, &q);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_fastscan(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        late_run lr = { .ok = r->status == LSS_OK,
+                        .requests = (unsigned) membus_get_stats(b)->lss_requests,
+                        .retries = (unsigned) lss_master_get_stats(m)->retries,
+                        .queued = q.queued };
+        snprintf(lr.message, sizeof(lr.message), "%s", r->message);
+        if (lr.ok)
+                ck_assert(lss_identity_equal(&r->id, &membus_slave(b, 0)->id));
+        lss_master_free(m);
+        membus_free(b);
+        return lr;
+}
+
+/* A slave answers one fastscan bit step after the wait and the late guard,
+ * as the next request goes out: its answer waits behind that request and
+ * comes in that step, sooner than any slave answers. Taken for that step's
+ * answer (before), it read that bit wrong and every bit after it silent, a
+ * serial nobody confirmed, read again: 1 retry, 33 more steps. Now the silent
+ * step is asked again (it answers: its bit is 0) and the bit after it too. */
+START_TEST(late_bit_answer_asked_again) {
+        unsigned cases = 0;
+        for (uint32_t late = 500; late <= 6000; late += 250) {
+                lss_slave_faults f = faults_latency(1000, 0);
+                membus *b = bus_random(1, 7, 0, 0, &f);
+                lss_slave *sl = membus_slave(b, 0);
+                int k = 30; /* a bit of the serial that reads 0: its step is answered */
+                while (k > 1 && (sl->id.serial >> k) & 1)
+                        k--;
+                ck_assert_int_eq((sl->id.serial >> k) & 1, 0);
+                sl->faults.late_bit_us = late;
+                sl->faults.late_bit_check = (uint8_t) k;
+                sl->faults.late_bit_sub = LSS_FIELD_SERIAL;
+                late_run lr = fastscan_once(b);
+                if (lr.queued == 0)
+                        continue;
+                cases++;
+                ck_assert_msg(lr.ok, "late %u: %s", late, lr.message);
+                /* ping, 4 x 33, inquiry; the silent step and the one after it again */
+                ck_assert_msg(lr.retries == 0 && lr.requests == 133 + 4 + 2, "late %u us: %u retries, %u requests",
+                              late, lr.retries, lr.requests);
+        }
+        ck_assert_uint_ge(cases, 2);
+}
+END_TEST
+
+/* The same for the confirmation of the last field (the slave goes into
+ * configuration with it): its late answer comes early in the first step of
+ * the field read again; the field is taken as confirmed. Before: the slave
+ * sat in configuration, the serial was read as all ones 4 times, a new ping
+ * nobody answered: "no device". */
+START_TEST(late_confirmation_taken) {
+        unsigned cases = 0;
+        for (uint32_t late = 500; late <= 6000; late += 250) {
+                lss_slave_faults f = faults_latency(1000, 0);
+                f.late_found_us = late;
+                late_run lr = fastscan_once(bus_random(1, 9, 0, 0, &f));
+                if (lr.queued == 0)
+                        continue;
+                cases++;
+                ck_assert_msg(lr.ok, "late %u: %s", late, lr.message);
+                /* the confirmation, then the serial's first bit instead of it */
+                ck_assert_msg(lr.requests == 133 + 4 + 1, "late %u us: %u retries, %u requests", late, lr.retries,
+                              lr.requests);
+        }
+        ck_assert_uint_ge(cases, 2);
 }
 END_TEST
 
@@ -466,6 +565,8 @@ int main(void) {
         tcase_add_test(tc, foreign_answers_leave_waits_alone);
         tcase_add_test(tc, lone_slave_bits_end_at_answer);
         tcase_add_test(tc, merged_answers_cost_a_retry);
+        tcase_add_test(tc, late_bit_answer_asked_again);
+        tcase_add_test(tc, late_confirmation_taken);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
