@@ -50,7 +50,7 @@ static void judge_lone(lss_master *m, lss_fastscan_state *s) {
  * request was out (lss_step.stale_answer), right after a silent step is most
  * likely that step's, late: taken for the next step's it reads a bit wrong
  * and a field nobody confirms follows. So a silent bit step is asked again;
- * a silent confirmation has moved the slaves on and is taken as confirmed
+ * a silent confirmation (or guess) has moved the slaves on and is taken as confirmed
  * (docs/engine.md, "An early answer after a silence"). This is the late
  * answer's latency from its own request. */
 static uint32_t late_latency(const lss_master *m, const lss_fastscan_state *s) {
@@ -107,6 +107,9 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 if (step_answered(m))
                                         continue;
                                 s->guessing = false;
+                                s->after = AFTER_SILENT_CONFIRM;
+                                s->confirm_value = s->value[s->sub];
+                                s->confirm_guessed = true;
                         }
                         for (s->field_try = 0;; s->field_try++) {
                                 if (s->sub < s->confirmed) {
@@ -145,6 +148,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                                 step_sample(m, late_latency(m, s));
                                                         s->value[s->sub] = s->confirm_value;
                                                         s->late_confirmed = true;
+                                                        /* a guess that held, late: guessing goes on */
+                                                        s->guessing = s->confirm_guessed;
                                                         break;
                                                 }
                                                 if (s->late_before && s->early_after == AFTER_SILENT_BIT) {
@@ -189,6 +194,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 m->stats.retries++;
                                 s->after = AFTER_SILENT_CONFIRM;
                                 s->confirm_value = s->value[s->sub];
+                                s->confirm_guessed = false;
                                 s->lone_failed = s->lone_failed || s->lone;
                                 s->lone = false;
                                 if (s->known.known_bits[s->sub] >= 32 && s->sub >= s->confirmed &&

@@ -102,6 +102,7 @@ typedef struct lss_fastscan_state {
         int early_after;           /* `after` of the bit step being asked */
         bool watch_next;           /* the next step judges an early answer */
         uint32_t confirm_value;    /* of the confirmation nobody answered */
+        bool confirm_guessed;      /* ... which was a guess */
         bool late_confirmed;       /* ... whose answer came early in the next step */
         bool late_before, bit_answered; /* the bit step just asked */
         uint32_t early_latency_us, late_latency_us; /* an early answer: as the next step's, as the one before's */

@@ -298,11 +298,9 @@ static void fastscan(lss_slave *s, const lss_frame *f) {
                 s->late_found_sent = true;
                 s->tx_ready_us = s->now_us + tx_delay(s) + s->faults.late_found_us;
         }
-        if (s->faults.late_bit_us > 0 && !s->late_bit_sent && bitcheck > 0 &&
-            bitcheck == s->faults.late_bit_check && sub == s->faults.late_bit_sub) {
-                s->late_bit_sent = true;
-                s->tx_ready_us = s->now_us + tx_delay(s) + s->faults.late_bit_us;
-        }
+        if (s->faults.late_fs_us > 0 && bitcheck == s->faults.late_fs_check && sub == s->faults.late_fs_sub &&
+            ++s->late_fs_seen == s->faults.late_fs_nth)
+                s->tx_ready_us = s->now_us + tx_delay(s) + s->faults.late_fs_us;
         answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
         if (bitcheck != 0)
                 return;

@@ -53,10 +53,10 @@ typedef struct lss_slave_faults {
         bool configure_error_specific; /* configure node-ID -> 255/spec 0x42 */
         uint32_t late_found_us;   /* the first answer to the fastscan request that
                                    * completes its identity comes this much later */
-        uint32_t late_bit_us;     /* the first answer to the Fastscan bit step with
-                                   * bitcheck late_bit_check (1..31) in field
-                                   * late_bit_sub comes this much later */
-        uint8_t late_bit_check, late_bit_sub;
+        uint32_t late_fs_us;      /* the late_fs_nth (from 1) answer to a Fastscan
+                                   * request with bitcheck late_fs_check in field
+                                   * late_fs_sub comes this much later (0: off) */
+        uint8_t late_fs_check, late_fs_sub, late_fs_nth;
         uint32_t spike_ppm;       /* each answer is spike_us late with this probability */
         uint32_t spike_us;        /* (per million): a host that stalls now and then */
         uint32_t rx_loss_ppm;     /* each received frame is lost with this probability
@@ -112,7 +112,7 @@ typedef struct lss_slave {
         uint64_t tx_ready_us;
         unsigned changes;         /* incremented on every persistent state change */
         bool late_found_sent;     /* late_found_us used up */
-        bool late_bit_sent;       /* late_bit_us used up */
+        unsigned late_fs_seen;    /* answers that matched late_fs_check/sub so far */
         uint64_t heartbeat_at_us; /* next heartbeat, UINT64_MAX none */
         lss_slave_emit_fn emit;
         void *userdata;

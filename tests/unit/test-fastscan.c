@@ -179,14 +179,21 @@ END_TEST
 typedef struct queued_answers {
         uint64_t request_at;
         unsigned queued;
+        bool confirming;         /* the last request: a Fastscan confirmation, no answer yet */
+        unsigned silent_confirmations;
 } queued_answers;
 
 static void count_queued(void *ud, const lss_frame *f, uint64_t t) {
         queued_answers *q = ud;
-        if (lss_is_request(f))
+        if (lss_is_request(f)) {
+                q->silent_confirmations += q->confirming;
+                q->confirming = f->data[0] == LSS_CS_FASTSCAN && f->data[5] == 0 && f->data[7] != f->data[6];
                 q->request_at = t;
-        else if (lss_is_response(f) && q->request_at && t - q->request_at < 1200)
-                q->queued++;
+        } else if (lss_is_response(f)) {
+                q->confirming = false;
+                if (q->request_at && t - q->request_at < 1200)
+                        q->queued++;
+        }
 }
 
 /* One fastscan of the bus's one slave (the bus is freed): a result is always
@@ -231,9 +238,10 @@ START_TEST(late_bit_answer_asked_again) {
                 while (k > 1 && (sl->id.serial >> k) & 1)
                         k--;
                 ck_assert_int_eq((sl->id.serial >> k) & 1, 0);
-                sl->faults.late_bit_us = late;
-                sl->faults.late_bit_check = (uint8_t) k;
-                sl->faults.late_bit_sub = LSS_FIELD_SERIAL;
+                sl->faults.late_fs_us = late;
+                sl->faults.late_fs_check = (uint8_t) k;
+                sl->faults.late_fs_sub = LSS_FIELD_SERIAL;
+                sl->faults.late_fs_nth = 1;
                 late_run lr = fastscan_once(b);
                 if (lr.queued == 0)
                         continue;
@@ -265,6 +273,44 @@ START_TEST(late_confirmation_taken) {
                 /* the confirmation, then the serial's first bit instead of it */
                 ck_assert_msg(lr.requests == 133 + 4 + 1, "late %u us: %u retries, %u requests", late, lr.retries,
                               lr.requests);
+        }
+        ck_assert_uint_ge(cases, 2);
+}
+END_TEST
+
+/* The same for a guess (an enumeration's second find confirms the first
+ * one's vendor, product and revision directly): the second slave answers the
+ * product's late, the field is taken as confirmed and the revision guessed.
+ * Before: the product was read as all ones and nobody confirmed it, 4 times,
+ * then a new attempt. */
+START_TEST(late_guess_taken) {
+        unsigned cases = 0;
+        for (uint32_t late = 500; late <= 6000; late += 250) {
+                lss_slave_faults f = faults_latency(1000, 0);
+                membus *b = membus_new(125000);
+                lss_identity a = { 0x9A, 3, 0x10, 0x1000 }, second = { 0x9A, 3, 0x10, 0x2000 };
+                membus_add_slave(b, &a, LSS_NODE_ID_UNCONFIGURED, &f);
+                f.late_fs_us = late;
+                f.late_fs_check = 0;
+                f.late_fs_sub = LSS_FIELD_PRODUCT;
+                f.late_fs_nth = 2; /* the first find's confirmation of the product is its first */
+                membus_add_slave(b, &second, LSS_NODE_ID_UNCONFIGURED, &f);
+                queued_answers q = { 0 };
+                membus_set_trace(b, count_queued, &q);
+                lss_master *m = master_default();
+                ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+                const lss_result *r = run(m, b);
+                assert_devices_real(b, r);
+                if (q.queued > 0) {
+                        cases++;
+                        ck_assert_msg(r->status == LSS_OK && r->n_devices == 2, "late %u: %s", late, r->message);
+                        /* the guess of the product, late */
+                        ck_assert_msg(q.silent_confirmations == 1, "late %u us: %u confirmations nobody answered",
+                                      late, q.silent_confirmations);
+                }
+                ck_assert(all_waiting(b));
+                lss_master_free(m);
+                membus_free(b);
         }
         ck_assert_uint_ge(cases, 2);
 }
@@ -567,6 +613,7 @@ int main(void) {
         tcase_add_test(tc, merged_answers_cost_a_retry);
         tcase_add_test(tc, late_bit_answer_asked_again);
         tcase_add_test(tc, late_confirmation_taken);
+        tcase_add_test(tc, late_guess_taken);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
