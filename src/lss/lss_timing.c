@@ -116,7 +116,11 @@ uint32_t lss_timing_answer_guard(const lss_timing *t) {
         return g + answer_frame_us(t);
 }
 
-/* Latency counts to the end of the answer on the wire, so an answer that
+/* Taken for early, a step's own answer costs one step asked again; taken
+ * for its own, a late one costs a field read again: so not only the clearly
+ * early count (a TCG VM's late answers came 0.3 to 0.9 ms into the next
+ * step, its slaves' own after 1.5 ms at the least).
+ * Latency counts to the end of the answer on the wire, so an answer that
  * waited behind the request (a late one) arrives one frame time after it:
  * what is compared is a latency without that frame (111 bits without stuff
  * bits), the slave's own part. Stuff bits leave up to 24 bit times of it
@@ -128,7 +132,7 @@ bool lss_timing_early(const lss_timing *t, uint32_t latency_us) {
         int64_t frame = t->cfg.bitrate ? 111ll * 1000000 / t->cfg.bitrate : 0;
         int64_t slack = t->cfg.bitrate ? 24ll * 1000000 / t->cfg.bitrate : 0;
         int64_t own = (int64_t) latency_us - frame, fastest = (int64_t) lss_timing_min(t) - frame;
-        return fastest > 2 * slack && own * 2 < fastest;
+        return fastest > 2 * slack && own * 4 < fastest * 3;
 }
 
 uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery) {

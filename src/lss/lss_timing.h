@@ -48,7 +48,7 @@ void lss_timing_init(lss_timing *t, const lss_timing_config *cfg);
 void lss_timing_add_sample(lss_timing *t, uint32_t latency_us);
 uint32_t lss_timing_max(const lss_timing *t);
 uint32_t lss_timing_min(const lss_timing *t);
-/* Sooner than half the fastest answer of the window (once it holds
+/* Sooner than 3/4 of the fastest answer of the window (once it holds
  * LSS_EARLY_MIN_SAMPLES; both without the answer's frame time): too soon
  * to be a slave's answer to the request just sent, as far as this bus has
  * shown. */

@@ -580,6 +580,38 @@ START_TEST(adaptive_timing) {
 }
 END_TEST
 
+/* What counts as too soon to be a step's own answer (fastscan then asks the
+ * silent step before it again): under 3/4 of the fastest answer of the
+ * window, both without the answer's frame time; not before 8 samples, and
+ * never for slaves with no latency of their own beyond stuff bits. */
+START_TEST(early_answer_rule) {
+        lss_timing_config c;
+        lss_timing_config_default(&c);
+        c.bitrate = 0; /* vcan: no frame time */
+        lss_timing t;
+        lss_timing_init(&t, &c);
+        for (int i = 0; i < 7; i++)
+                lss_timing_add_sample(&t, 2000);
+        ck_assert(!lss_timing_early(&t, 100));
+        lss_timing_add_sample(&t, 2000);
+        ck_assert(lss_timing_early(&t, 1400));
+        ck_assert(!lss_timing_early(&t, 1500));
+
+        c.bitrate = 125000; /* frame 888 us without stuff bits, up to 192 us more */
+        lss_timing_init(&t, &c);
+        for (int i = 0; i < 8; i++)
+                lss_timing_add_sample(&t, 2000);
+        ck_assert(lss_timing_early(&t, 888 + 800));
+        ck_assert(!lss_timing_early(&t, 888 + 900));
+        ck_assert(lss_timing_early(&t, 1000)); /* waited behind the request: a frame time */
+
+        lss_timing_init(&t, &c);
+        for (int i = 0; i < 8; i++)
+                lss_timing_add_sample(&t, 1200); /* 0.3 ms of its own: within twice the stuff bits */
+        ck_assert(!lss_timing_early(&t, 900));
+}
+END_TEST
+
 /* A slave slower than the adaptive wait answers inside the late guard: the
  * answer still counts and the wait grows. */
 START_TEST(late_answer_in_guard_counts) {
@@ -707,6 +739,7 @@ int main(void) {
         tcase_add_test(tc, busy_and_bus_errors);
         tcase_add_test(tc, rx_lost_voids_step);
         tcase_add_test(tc, adaptive_timing);
+        tcase_add_test(tc, early_answer_rule);
         tcase_add_test(tc, late_answer_in_guard_counts);
         tcase_add_test(tc, identify_services);
         tcase_add_test(tc, patience_follows_late_answers);
