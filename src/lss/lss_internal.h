@@ -62,7 +62,7 @@ typedef struct lss_step {
         bool late;             /* answered inside the late guard */
         bool early;            /* (watch_early) the first answer came sooner than any slave
                                 * answers: maybe the step before's, late; its latency is
-                                * not sampled (the caller decides, step_sample_early) */
+                                * not sampled (the caller decides: step_sample) */
         uint32_t latency_us;   /* of the first answer */
         bool stale_answer;     /* (watch_early) an answer it asks for came before its
                                 * request was out: the step before's, late */
