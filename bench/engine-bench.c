@@ -6,7 +6,10 @@
  * and (d) the blind Scan: one enumeration of every slave (one vendor and
  * product, revision and serial random: the lss-sim set-up of bench/run),
  * (e) AutoAssign with a map of full identities (what lssd runs for one),
- * (f) Scan with vendor and product given (slowscan: identify-remote bisection).
+ * (f) Scan with vendor and product given (slowscan: identify-remote bisection),
+ * (g) AutoAssign with a pool, the map naming vendor and product only (one
+ * absent device of that type), (h) AutoAssign with a pool, blind (what lssd
+ * runs for bench/autoaddress.py's modes vendor and blind).
  * And the SDO identity discovery of node-IDs 1..127 with N configured devices
  * at 1..N, against the bus floor of its frames.
  * Not a test: prints tables. Correctness is still checked: every slave must
@@ -25,10 +28,11 @@
 #define LATENCY_US 1000u
 #define JITTER_US 300u
 
-enum mode { BLIND, KNOWN_VP, FULL, SCAN, AA_MAPPED, SLOWSCAN };
+enum mode { BLIND, KNOWN_VP, FULL, SCAN, AA_MAPPED, SLOWSCAN, AA_POOL_VP, AA_POOL_BLIND };
 static const char *const mode_names[] = { "(a) blind fastscan", "(b) vendor+product known",
                                           "(c) full identity known", "(d) blind Scan (enumerate)",
-                                          "(e) AutoAssign, full map", "(f) Scan vendor+product" };
+                                          "(e) AutoAssign, full map", "(f) Scan vendor+product",
+                                          "(g) AutoAssign pool, v+p", "(h) AutoAssign pool, blind" };
 
 typedef struct row {
         uint64_t lss_frames, all_frames, busy_us, elapsed_us;
@@ -41,6 +45,36 @@ static void stalls(lss_slave_faults *f) {
         const char *ppm = getenv("ENGINE_BENCH_STALL_PPM"), *us = getenv("ENGINE_BENCH_STALL_US");
         f->spike_ppm = ppm ? (uint32_t) strtoul(ppm, NULL, 10) : 0;
         f->spike_us = us ? (uint32_t) strtoul(us, NULL, 10) : 8000;
+}
+
+/* (g), (h): the pool gives every slave a node-ID of its own, each one the
+ * slave has and the outcomes report */
+static int autoassign_pool(lss_master *m, membus *b, const lss_identity *ids, size_t n, bool vp) {
+        /* (g): the map's only entry is an absent device of the slaves' type */
+        lss_map_entry absent = { .id = { ids[0].vendor, ids[0].product, 0, 0xA0000000u }, .revision_known = true,
+                                 .node_id = 127 };
+        lss_autoassign_plan p = { .map = vp ? &absent : NULL, .n_map = vp ? 1 : 0, .unknown = LSS_UNKNOWN_POOL,
+                                  .pool_lo = 1, .pool_hi = 64, .store = true };
+        lss_master_autoassign(m, &p, membus_now(b));
+        const lss_result *r = lss_drive(m, b, 3600ull * 1000000, NULL, NULL);
+        size_t n_out, given = 0;
+        const lss_outcome *o = lss_master_outcomes(m, &n_out);
+        bool seen[128] = { false };
+        for (size_t k = 0; k < n_out; k++) {
+                const lss_slave *s = membus_find(b, &o[k].id);
+                if (!s)
+                        continue; /* the absent one */
+                if (o[k].kind != LSS_OUTCOME_POOL || s->st.active_node_id != o[k].new_node_id ||
+                    seen[o[k].new_node_id])
+                        break;
+                seen[o[k].new_node_id] = true;
+                given++;
+        }
+        if (given != n || r->status == LSS_E_CANCELLED) {
+                fprintf(stderr, "AutoAssign pool of %zu: %zu right: %s\n", n, given, r->message);
+                return 1;
+        }
+        return 0;
 }
 
 static int run_case(enum mode mode, size_t n, uint64_t seed, row *out) {
@@ -103,7 +137,9 @@ static int run_case(enum mode mode, size_t n, uint64_t seed, row *out) {
                 free(map);
                 n = 0;
         }
-        for (size_t i = 0; i < n; i++) {
+        if (mode == AA_POOL_VP || mode == AA_POOL_BLIND)
+                bad |= autoassign_pool(m, b, ids, n, mode == AA_POOL_VP);
+        for (size_t i = 0; i < n && mode != AA_POOL_VP && mode != AA_POOL_BLIND; i++) {
                 uint8_t nid = (uint8_t) (i + 1);
                 unsigned flags = LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY;
                 if (mode == FULL)
@@ -202,7 +238,7 @@ int main(void) {
                fastscan_floor_us / 1000);
         printf("%-26s %4s %10s %10s %12s %12s %10s %10s\n", "case", "N", "LSS frames", "frames/N", "bus time ms",
                "elapsed ms", "ms/node", "vs floor");
-        for (int mode = BLIND; mode <= SLOWSCAN; mode++)
+        for (int mode = BLIND; mode <= AA_POOL_BLIND; mode++)
                 for (size_t i = 0; i < 3u + (mode == SCAN); i++) {
                         row r;
                         if (i == 3)
@@ -218,7 +254,7 @@ int main(void) {
                                (unsigned long long) r.lss_frames, (double) r.lss_frames / ns[i],
                                r.busy_us / 1000.0, r.elapsed_us / 1000.0, per_node, vs);
                 }
-        printf("# vs floor: (c),(e) LSS frames / 10 per node (target <= 1.5x); (a),(b),(d),(f) elapsed per node / fastscan "
+        printf("# vs floor: (c),(e) LSS frames / 10 per node (target <= 1.5x); (a),(b),(d),(f),(g),(h) elapsed per node / fastscan "
                "floor (target for (a) <= 2x)\n");
 
         printf("\n# SDO identity discovery (window %u), node-IDs 1..127, N devices at 1..N, same latency\n",
