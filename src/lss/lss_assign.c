@@ -70,11 +70,15 @@ bool store_answer_ok(lss_master *m) {
 /* The part shared by both ways in: the slave is the only one in configuration. */
 static int assign_tail(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->tail_pc);
-        REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
-                        LSS_CS_INQUIRE_NODE_ID);
-        if (!inquired_node_id_ok(m))
-                goto out;
-        s->old = m->result.node_id;
+        if (s->old_known) {
+                m->result.node_id = s->old;
+        } else {
+                REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                LSS_CS_INQUIRE_NODE_ID);
+                if (!inquired_node_id_ok(m))
+                        goto out;
+                s->old = m->result.node_id;
+        }
         if (s->old == s->node_id) {
                 /* Already right: nothing to configure, nothing to store —
                  * unless the node-ID came from an interrupted pass: configured,
@@ -183,6 +187,15 @@ out:
         /* a pass goes on after a failed assignment: nobody may stay selected */
         if (m->result.status != LSS_OK)
                 SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        PT_END(&s->pc);
+}
+
+int proc_assign_selected(lss_master *m, lss_assign_state *s) {
+        PT_BEGIN(&s->pc);
+        result_reset(m);
+        m->result.id = s->id;
+        s->tail_pc = 0;
+        PT_CALL(&s->pc, assign_tail(m, s));
         PT_END(&s->pc);
 }
 

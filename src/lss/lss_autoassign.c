@@ -267,6 +267,63 @@ static uint32_t patient_wait(const lss_master *m, const lss_aa_state *s) {
         return (uint32_t) (w < PATIENT_MAX_US ? w : PATIENT_MAX_US);
 }
 
+/* The lowest pool node-ID not given, not taken and nobody is set aside
+ * with (0: none). */
+static uint8_t pool_next_direct(const lss_aa_state *s, const bool *aside) {
+        for (unsigned id = s->plan->pool_lo; id <= s->plan->pool_hi && id <= LSS_NODE_ID_MAX; id++)
+                if (!s->used[id] && !s->taken[id] && !aside[id])
+                        return (uint8_t) id;
+        return 0;
+}
+
+/* The enumeration's direct assignment (lss_enum_direct): a device for the
+ * pool gets its node-ID the moment it is confirmed, alone in configuration,
+ * as handle_found() would give it after the give-back, which saves it
+ * three selective switches, two Configure Node-ID and an inquiry. A map
+ * entry's device, a replacement candidate and one left alone are set aside
+ * and handled after the enumeration, as in a dry run. */
+static bool direct_choose(lss_master *m, void *ud, const lss_identity *id, const bool *aside,
+                          lss_probe_state **probe) {
+        lss_aa_state *s = ud;
+        lss_device d = { .id = *id, .node_id = LSS_NODE_ID_UNCONFIGURED };
+        if (aa_already_handled(s, id) || aa_lookup(s->plan, id) >= 0 || lss_replace_candidate(s->plan, s->handled, &d))
+                return false;
+        s->target = pool_next_direct(s, aside);
+        if (s->target == 0)
+                return false; /* the pool is exhausted: handle_found() says so */
+        if (!s->free[s->target]) {
+                /* the next few of the pool, probed together */
+                s->probe = (lss_probe_state) { .taken = s->taken, .free = s->free };
+                for (unsigned n = s->target; n <= s->plan->pool_hi && n <= LSS_NODE_ID_MAX &&
+                                             s->probe.n_ids < LSS_MAX_TX; n++)
+                        if (!s->used[n] && !s->taken[n] && !aside[n] && !s->free[n])
+                                s->probe.ids[s->probe.n_ids++] = (uint8_t) n;
+                *probe = &s->probe;
+                return false;
+        }
+        s->entry = s->replacing = -1;
+        memset(&m->as, 0, sizeof(m->as));
+        m->as.id = *id;
+        m->as.node_id = s->target;
+        m->as.flags = assign_flags(s);
+        m->as.taken = s->taken;
+        m->as.free = s->free;
+        m->as.unstored = unstored_now(s);
+        return true;
+}
+
+static void direct_done(lss_master *m, void *ud) {
+        lss_aa_state *s = ud;
+        s->avoid[s->target] = true; /* never a temporary node-ID of the enumeration */
+        if (m->result.in_use) {
+                s->used[s->target] = true;
+                aa_result_reset(m);
+                return;
+        }
+        moved(s, m);
+        aa_record(m, s, &m->as.id, LSS_OUTCOME_POOL);
+}
+
 /* 3. non-configured devices left: fastscan with the map's vendor and
  * product bits first, then blind while somebody still answers */
 static int enumerate_all(lss_master *m, lss_aa_state *s) {
@@ -290,8 +347,11 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
                 m->sc.avoid = s->avoid;
                 m->sc.keep_stopped = stops(s);
                 m->sc.no_set_aside = s->plan->dry_run;
+                s->direct = (lss_enum_direct) { .choose = direct_choose, .done = direct_done, .ud = s };
+                m->sc.direct = s->plan->unknown == LSS_UNKNOWN_POOL && !s->plan->dry_run ? &s->direct : NULL;
                 m->sc.listen = false; /* the second look asks patiently for what the map has */
                 m->sc.pc = m->sc.vpc = 0;
+                s->given_before = aa_count_given(s);
                 PT_CALL(&s->e_pc, proc_enumerate(m, &m->sc));
                 if (m->cancelling)
                         break;
@@ -308,7 +368,6 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
                 aa_result_reset(m);
                 if (aa_todo_take(s, m->devices, m->n_devices) < 0)
                         continue;
-                s->given_before = aa_count_given(s);
                 s->i_pc = 0;
                 PT_CALL(&s->e_pc, handle_found(m, s));
                 /* A slave whose fastscan confirmation (or ping) answer came

@@ -8,7 +8,9 @@
  *     revision for that vendor/product/serial (finds configured ones too).
  *  4. Non-configured devices left: enumeration by fastscan, with the known
  *     vendor/product bits of the map first, then blind when a ping still
- *     gets an answer; each is then handled by selective switch.
+ *     gets an answer. A device for the pool takes its node-ID the moment it
+ *     is confirmed (alone in configuration after a selective switch); the
+ *     others are set aside and handled by selective switch after it.
  *  5. Before a node-ID is given, the bus is asked whether some device
  *     already answers to it (SDO upload of object 0x1000 to that node, which
  *     every CANopen device must answer); if one does, the device is reported

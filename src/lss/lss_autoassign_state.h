@@ -41,6 +41,7 @@ typedef struct lss_aa_state {
         size_t given_before;    /* node-IDs given before the current blind enumeration */
         unsigned blind_passes;
         bool avoid[128];        /* node-IDs an enumeration may not set a slave aside with */
+        lss_enum_direct direct; /* the enumeration gives pool node-IDs as it finds (lss_autoassign.c) */
         enum lss_status failed; /* an enumeration met a slave that does not follow CiA 305 */
         char failed_msg[400];
         /* 1018h read by SDO (lss_autoassign_sdo.c) */

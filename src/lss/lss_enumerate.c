@@ -14,7 +14,10 @@
  *      node-ID T nobody answers to (SDO probe, a few candidates at once,
  *      each used within a few finds), goes back to waiting, takes
  *      T and stops answering Fastscan; a configured one stays in
- *      configuration (it should not have answered at all).
+ *      configuration (it should not have answered at all). A caller that
+ *      assigns (s->direct: AutoAssign's pool) may give the slave its
+ *      node-ID instead, stored and verified: configured, it takes no part
+ *      either, and is no candidate of the give-back.
  * At the end, also on failure or cancel, every slave set aside gets 255
  * back and NMT Reset Communication on T, and every one is verified by
  * selective switch and Inquire Node-ID.
@@ -49,6 +52,11 @@ static double finds_done(const lss_master *m, size_t k) {
         if (m->expected_finds >= k && m->expected_finds > 0)
                 return (double) k / m->expected_finds;
         return (double) k / ((double) k + PROGRESS_UNKNOWN_FINDS);
+}
+
+/* Slaves this pass found: candidates and those that took a node-ID at once. */
+static size_t finds_of(const lss_scan_state *s) {
+        return s->n_cand + s->n_direct;
 }
 
 static lss_device *found_before(lss_scan_state *s, const lss_identity *id) {
@@ -262,6 +270,45 @@ static int give_back(lss_master *m, lss_scan_state *s) {
         PT_END(&s->vpc);
 }
 
+/* The confirmed non-configured slave F, alone in configuration (selected,
+ * its node-ID just inquired), takes the node-ID s->direct gives it, stored
+ * and verified as by an assignment: it takes no further part, as one set
+ * aside. s->took: it did (or failed to after Configure Node-ID), its
+ * outcome is the caller's; else it is still in configuration, untouched:
+ * set it aside. */
+static int assign_direct(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->dpc);
+        s->took = false;
+        for (;;) {
+                s->dprobe = NULL;
+                if (!s->direct->choose(m, s->direct->ud, &s->found, s->back_due, &s->dprobe)) {
+                        if (!s->dprobe)
+                                goto out;
+                        PT_CALL(&s->dpc, proc_probe(m, s->dprobe));
+                        continue;
+                }
+                m->as.old = s->node;
+                m->as.old_known = true;
+                m->as.pc = 0;
+                PT_CALL(&s->dpc, proc_assign_selected(m, &m->as));
+                if (!m->result.in_use)
+                        break;
+                s->direct->done(m, s->direct->ud); /* somebody answers at it: another one */
+        }
+        s->took = true;
+        if (m->result.status != LSS_OK) {
+                /* it may have taken the node-ID, or not: back to waiting, as any assignment that failed */
+                SEND(m, &s->dpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        } else if (s->keep_stopped && m->result.changed) {
+                /* its boot-up with the node-ID put it in pre-operational */
+                SEND(m, &s->dpc, nmt_encode(&f__, NMT_CS_STOP, m->as.node_id));
+        }
+        s->direct->done(m, s->direct->ud);
+        s->n_direct++;
+out:;
+        PT_END(&s->dpc);
+}
+
 static void misbehaving(lss_master *m, lss_scan_state *s, const lss_identity *id, const char *what) {
         m->result.id = *id;
         s->misbehaving = true;
@@ -275,7 +322,7 @@ static void misbehaving(lss_master *m, lss_scan_state *s, const lss_identity *id
 static int handle_found(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->hpc);
         s->cpc = 0;
-        s->selected = false;
+        s->selected = s->took = false;
         if (s->n_kept == 0)
                 PT_CALL(&s->hpc, proc_confirm_found(m, s));
         if (s->confirm == CONFIRM_OTHER) {
@@ -371,22 +418,29 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 s->cand[s->n_cand - 1].node_id = LSS_NODE_ID_UNCONFIGURED;
                 s->n_kept++;
         } else {
-                s->apc = 0;
-                s->restore = true;
-                PT_CALL(&s->hpc, set_aside(m, s));
-                if (m->result.status != LSS_OK)
-                        goto out;
+                if (s->direct) {
+                        s->dpc = 0;
+                        PT_CALL(&s->hpc, assign_direct(m, s));
+                }
+                if (!s->took) {
+                        s->apc = 0;
+                        s->restore = true;
+                        PT_CALL(&s->hpc, set_aside(m, s));
+                        if (m->result.status != LSS_OK)
+                                goto out;
+                }
         }
         if (s->confirm == CONFIRM_OK) {
+                s->last_found = s->found;
                 /* confirmed by its own answers and now a candidate: tell the
                  * caller at once (a slave set aside gets 255 back at the end) */
-                master_found(m, &s->found, s->node, s->cand[s->n_cand - 1].aside_node_id);
+                master_found(m, &s->found, s->node, s->took ? 0 : s->cand[s->n_cand - 1].aside_node_id);
         }
 reselect:
         /* Kept ones were let go by a switch to waiting in this round: the
          * selection (whenever one was kept before), an unclear round, or
-         * setting a slave aside. Only the first kept one found by inquiry
-         * saw no switch. */
+         * setting a slave aside or giving it its node-ID. Only the first
+         * kept one found by inquiry saw no switch. */
         if (s->n_kept > 0 && (s->n_kept > 1 || s->confirm != CONFIRM_OK || s->node == LSS_NODE_ID_UNCONFIGURED ||
                               s->selected)) {
                 s->rpc = 0;
@@ -404,7 +458,7 @@ out:;
  * bus can hold in all. */
 static bool rounds_exhausted(const lss_master *m, const lss_scan_state *s) {
         unsigned margin = 2u * (m->timing.cfg.retries + 1u);
-        unsigned finds = (unsigned) s->n_cand;
+        unsigned finds = (unsigned) finds_of(s);
         return s->rounds - finds >= finds + margin || s->rounds >= 2u * LSS_ENUMERATE_MAX_FINDS + margin;
 }
 
@@ -413,7 +467,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
         s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
         s->misbehaving = s->nobody = false;
         for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
-                s->n_cand = s->n_aside = s->n_kept = 0;
+                s->n_cand = s->n_direct = s->n_aside = s->n_kept = 0;
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
                 s->next_temp = LSS_NODE_ID_MAX;
                 memset(s->back_due, 0, sizeof(s->back_due));
@@ -428,14 +482,14 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         if (rounds_exhausted(m, s)) {
                                 master_fail(m, LSS_E_INCOMPLETE, "the enumeration stopped: %u of its %u fastscan "
                                             "rounds found nobody new (%zu slaves found)",
-                                            s->rounds - (unsigned) s->n_cand, s->rounds, s->n_cand);
+                                            s->rounds - (unsigned) finds_of(s), s->rounds, finds_of(s));
                                 break;
                         }
                         s->rounds++;
                         if (m->now >= s->deadline) {
                                 master_fail(m, LSS_E_INCOMPLETE, "the enumeration stopped at its deadline of %" PRIu64
                                             " s (%zu slaves found)", lss_enumerate_deadline_us(&m->timing.cfg) / 1000000u,
-                                            s->n_cand);
+                                            finds_of(s));
                                 break;
                         }
                         /* slaves kept in configuration may answer every request */
@@ -443,17 +497,17 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         /* A Scan that finds nobody says the bus is empty, and
                          * nothing checks that later: its ping may be answered by
                          * slaves slower than the timeout, after the step. */
-                        if (s->listen && s->n_cand == 0)
+                        if (s->listen && finds_of(s) == 0)
                                 s->fs.ping_late_us = lss_timing_listen_guard(&m->timing);
-                        if (s->n_cand > 0) {
+                        if (finds_of(s) > 0) {
                                 /* vendor, product and revision of the last find: likely those of the next */
-                                s->fs.guess = s->cand[s->n_cand - 1].id;
+                                s->fs.guess = s->last_found;
                                 s->fs.n_guess = LSS_FIELD_COUNT - 1;
                         }
                         /* this find's share of the 90 % before the give-back */
-                        m->prog_base = s->prog_base0 + s->prog_span0 * 0.9 * finds_done(m, s->n_cand);
-                        m->prog_span = s->prog_span0 * 0.9 * (finds_done(m, s->n_cand + 1) -
-                                                              finds_done(m, s->n_cand));
+                        m->prog_base = s->prog_base0 + s->prog_span0 * 0.9 * finds_done(m, finds_of(s));
+                        m->prog_span = s->prog_span0 * 0.9 * (finds_done(m, finds_of(s) + 1) -
+                                                              finds_done(m, finds_of(s)));
                         PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
                         m->prog_base = s->prog_base0;
                         m->prog_span = s->prog_span0;
@@ -462,8 +516,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         if (s->fs.none) {
                                 /* (a pass that found nobody, e.g. the map's devices
                                  * all handled, asks once, as an empty bus costs) */
-                                if (s->looks++ >= (s->n_cand > 0 ? m->timing.cfg.retries : 0)) {
-                                        s->nobody = s->n_cand == 0 && s->fs.silent;
+                                if (s->looks++ >= (finds_of(s) > 0 ? m->timing.cfg.retries : 0)) {
+                                        s->nobody = finds_of(s) == 0 && s->fs.silent;
                                         break;
                                 }
                                 /* Silence may be a slave that lost the ping (a frame lost
@@ -481,7 +535,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 if (++s->failed_scans <= m->timing.cfg.retries)
                                         continue;
                                 master_fail(m, LSS_E_INCOMPLETE, "fastscan did not converge after %zu slaves",
-                                            s->n_cand);
+                                            finds_of(s));
                                 break;
                         }
                         for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)

@@ -112,6 +112,7 @@ typedef struct lss_assign_state {
         int pc, tail_pc;
         lss_identity id;
         uint8_t node_id, old;
+        bool old_known;         /* proc_assign_selected: `old` was just inquired, not asked again */
         unsigned flags, attempt, field;
         bool selected;
         const bool *taken;      /* node-IDs known to be taken (128 entries), or NULL */
@@ -137,6 +138,23 @@ typedef struct lss_range_item {
 } lss_range_item;
 
 enum lss_confirm { CONFIRM_OK, CONFIRM_NOBODY, CONFIRM_OTHER, CONFIRM_UNCLEAR };
+
+/* An enumeration's caller that assigns (AutoAssign): a confirmed
+ * non-configured slave, alone in configuration, may take its node-ID at
+ * once (proc_assign_selected with m->as) instead of a temporary one that is
+ * given back at the end before it is selected again for the assignment. */
+typedef struct lss_enum_direct {
+        /* Sets up m->as for the slave `id` and returns true; false: set it
+         * aside. `aside`: node-IDs slaves are set aside with now (never to be
+         * given). *probe set: those node-IDs are probed first, then it is
+         * asked again. */
+        bool (*choose)(lss_master *m, void *ud, const lss_identity *id, const bool *aside, lss_probe_state **probe);
+        /* m->as ran (m->result): the outcome is the caller's. result.in_use:
+         * somebody answers at that node-ID, nothing was configured; the
+         * enumeration asks choose() again. */
+        void (*done)(lss_master *m, void *ud);
+        void *ud;
+} lss_enum_direct;
 
 typedef struct lss_scan_state {
         int pc, vpc, cpc, apc, rpc, hpc;
@@ -164,6 +182,12 @@ typedef struct lss_scan_state {
         enum lss_confirm confirm;
         uint8_t node, temp, next_temp;
         const bool *avoid;      /* 128 entries or NULL: node-IDs not to set anybody aside with */
+        const lss_enum_direct *direct; /* NULL: nobody takes a node-ID during the enumeration */
+        int dpc;
+        lss_probe_state *dprobe;
+        size_t n_direct;        /* slaves that took their node-ID at once: finds, not candidates */
+        bool took;              /* this round's slave did (or failed to after Configure Node-ID) */
+        lss_identity last_found; /* the last slave confirmed (its fields are the next fastscan's guess) */
         lss_fastscan_known known;
         lss_identify_range range;
         lss_fastscan_state fs;
@@ -328,6 +352,11 @@ void master_progress(lss_master *m, double p);
 int proc_fastscan(lss_master *m, lss_fastscan_state *s);
 int proc_assign(lss_master *m, lss_assign_state *s);
 int proc_fastscan_assign(lss_master *m, lss_assign_state *s);
+/* The slave s->id is alone in configuration already: proc_assign without
+ * its selective switch, and without the switch to waiting on a failure (the
+ * caller knows where the slave is; result.changed: Configure Node-ID was
+ * answered, failed_service: where it stopped). */
+int proc_assign_selected(lss_master *m, lss_assign_state *s);
 int proc_unassign(lss_master *m, lss_assign_state *s);
 int proc_enumerate(lss_master *m, lss_scan_state *s);
 /* probe.c: sets taken[id] or free[id] for every id of s->ids[0, n_ids) */

@@ -646,6 +646,7 @@ static int start_enumerate(lss_master *m, const lss_fastscan_known *known, bool 
         set_known(&m->sc.known, known);
         m->sc.pc = m->sc.vpc = 0;
         m->sc.avoid = NULL;
+        m->sc.direct = NULL;
         m->sc.keep_stopped = keep_stopped;
         m->sc.no_set_aside = false;
         m->sc.listen = true;
