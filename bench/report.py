@@ -19,10 +19,9 @@ LABEL = {'mapped': 'lssd, map (full identities)', 'vendor': 'lssd, vendor/produc
          'vendor-canopennode': 'lssd, vendor known, CANopenNode', 'blind-canopennode': 'lssd, blind, CANopenNode',
          'canopen': 'python-canopen fast_scan loop'}
 SPEEDUP_NAME = {'mapped': 'mapped', 'vendor': 'known-vendor', 'blind': 'blind'}
-# lssd's modes and engine-bench's cases: the same procedure (AutoAssign with the mode's map; (c) is
-# what AutoAssign runs per device of a full map)
-ENGINE_CASE = {'mapped': 'c', 'vendor': 'g', 'blind': 'h'}
-ENGINE_NAME = {'c': '(c) full identity known', 'g': '(g) AutoAssign pool, v+p', 'h': '(h) AutoAssign pool, blind'}
+# lssd's modes and engine-bench's cases: the same procedure (AutoAssign with the mode's map)
+ENGINE_CASE = {'mapped': 'e', 'vendor': 'g', 'blind': 'h'}
+ENGINE_NAME = {'e': '(e) AutoAssign, full map', 'g': '(g) AutoAssign pool, v+p', 'h': '(h) AutoAssign pool, blind'}
 ENGINE_ROW = re.compile(r'^\(([a-h])\)\D*?\s+(\d+)\s+(\d+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)x\s*$')
 PARALLEL_MAX = 1.2  # "about as long as the slowest bus alone"
 
@@ -407,9 +406,10 @@ def main():
                 '%.2fx' % (hog_pn / n / eng_pn) if hog_pn else '-'))
         print('# lssd s/node: median wall time / N (VM, vcan0, idle); engine s/n: engine-bench ms/node (same latency '
               'and bus, virtual time); hog: the CPU hog runs')
-        print("# the engine case runs lssd's procedure: (g) and (h) are AutoAssign with the bench's vendor and blind "
-              'maps and pool; the targets of issue 22 came from (b) and (a), one fastscan and assignment per device, '
-              'which has no enumeration (confirmation and selection of each find, the vendor map\'s absent device)')
+        print("# the engine case runs lssd's procedure, AutoAssign with the bench's map (and pool); its bus has 125 "
+              'kbit/s frame times, vcan none. The targets of issue 22 came from (c), (b) and (a), one assignment (and '
+              "fastscan) per device: no probe, no enumeration (confirmation and selection of each find), no absent "
+              'device looked for twice')
 
     if history:
         print()
