@@ -83,7 +83,7 @@ typedef struct lss_timing_config {
         uint32_t timeout_us;        /* fixed no-answer wait; also the adaptive start value */
         bool adaptive;              /* derive the wait from measured answer latency */
         uint32_t floor_us;          /* adaptive: never wait less than this */
-        uint32_t factor_pct;        /* adaptive: wait = factor * worst latency seen (125 = 1.25x) */
+        uint32_t factor_pct;        /* adaptive: wait = factor * worst latency seen (150 = 1.5x) */
         uint32_t guard_floor_us;    /* minimum answer guard and late guard */
         uint32_t bootup_timeout_us; /* wait for the boot-up that verifies an assignment */
         uint32_t bitrate;           /* bit/s of the bus, 0 = unknown (frame times then count as 0) */

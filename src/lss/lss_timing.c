@@ -8,7 +8,7 @@ void lss_timing_config_default(lss_timing_config *c) {
                 .timeout_us = 20000,
                 .adaptive = true,
                 .floor_us = 1000,
-                .factor_pct = 125,
+                .factor_pct = 150,
                 .guard_floor_us = 300,
                 .bootup_timeout_us = 1000000,
                 .bitrate = 125000,

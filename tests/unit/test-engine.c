@@ -553,7 +553,7 @@ START_TEST(adaptive_timing) {
         /* latency = 2 ms + the answer frame (~1 ms at 125k) */
         ck_assert_uint_ge(st->latency_max_us, 2800);
         ck_assert_uint_le(st->latency_max_us, 3300);
-        ck_assert_uint_eq(st->timeout_us, st->latency_max_us * c.factor_pct / 100);
+        ck_assert_uint_eq(st->timeout_us, st->latency_max_us * 150 / 100);
 
         /* fixed mode waits what it is told */
         c.adaptive = false;
@@ -704,18 +704,17 @@ START_TEST(patience_follows_late_answers) {
         /* down to what the answers ask: never below twice their latency */
         ck_assert_uint_le(t.patience_us, 2000);
 
-        /* prompt answers (4 ms): the adaptive wait is 5 ms; an answer that
+        /* prompt answers (4 ms): the adaptive wait is 6 ms; an answer that
          * came after its step ended (a latency spike) doubles the wait, not
          * the first-contact limit */
         lss_timing_add_sample(&t, 4000);
-        ck_assert_uint_eq(lss_timing_wait(&t, false), 5000);
+        ck_assert_uint_eq(lss_timing_wait(&t, false), 6000);
         lss_timing_on_stray(&t);
-        ck_assert_uint_eq(lss_timing_wait(&t, false), 10000);
+        ck_assert_uint_eq(lss_timing_wait(&t, false), 12000);
         ck_assert_uint_eq(lss_timing_wait(&t, true), 20000);
         lss_timing_on_stray(&t);
-        lss_timing_on_stray(&t);
-        ck_assert_uint_eq(lss_timing_wait(&t, false), 40000);
-        ck_assert_uint_eq(lss_timing_late_guard(&t, false), 1250);
+        ck_assert_uint_eq(lss_timing_wait(&t, false), 24000);
+        ck_assert_uint_eq(lss_timing_late_guard(&t, false), 1500);
 }
 END_TEST
 
