@@ -37,10 +37,11 @@ static void judge_lone(lss_master *m, lss_fastscan_state *s) {
 }
 
 /* `unguarded`: the step may end at its answer when one slave alone takes
- * part. A bit step after a silent one watches for an early answer (below). */
-#define FASTSCAN_STEP(m, s, frame_expr, unguarded) \
+ * part. `bit`: a bit step, whose silence is an answer (the shorter wait).
+ * A bit step after a silent one watches for an early answer (below). */
+#define FASTSCAN_STEP(m, s, frame_expr, unguarded, bit) \
         do { lss_frame f__; frame_expr; step_lss(m, LSS_CS_IDENTIFY_SLAVE); step_add_tx(m, &f__); \
-             m->step.ends_at_answer = (s)->lone && (unguarded); \
+             m->step.ends_at_answer = (s)->lone && (unguarded); m->step.silence_answers = (bit); \
              m->step.watch_early = (s)->watch_next; (s)->watch_next = false; \
              step_start(m); PT_YIELD(&(s)->pc); \
              judge_lone(m, s); (s)->before_sent_us = (s)->sent_us; \
@@ -103,7 +104,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 s->value[s->sub] = lss_identity_field(&s->guess, s->sub);
                                 FASTSCAN_STEP(m, s,
                                              lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
-                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false);
+                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false, false);
                                 if (step_answered(m))
                                         continue;
                                 s->guessing = false;
@@ -123,7 +124,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                 FASTSCAN_STEP(m, s,
                                                              lss_encode_fastscan(&f__, s->value[s->sub],
                                                                                  (uint8_t) (32 - s->known.known_bits[s->sub]),
-                                                                                 (uint8_t) s->sub, (uint8_t) s->sub), true);
+                                                                                 (uint8_t) s->sub, (uint8_t) s->sub), true, false);
                                                 if (!step_answered(m) && s->field_try >= m->timing.cfg.retries) {
                                                         s->none = true;
                                                         goto out;
@@ -137,7 +138,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                 FASTSCAN_STEP(m, s,
                                                              lss_encode_fastscan(&f__, s->value[s->sub],
                                                                                  (uint8_t) s->bit, (uint8_t) s->sub,
-                                                                                 (uint8_t) s->sub), s->bit > 0);
+                                                                                 (uint8_t) s->sub), s->bit > 0, true);
                                                 s->bit_answered = step_answered(m);
                                                 s->late_before = m->step.stale_answer ||
                                                                  (s->bit_answered && m->step.early);
@@ -159,7 +160,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                                      lss_encode_fastscan(&f__,
                                                                                          s->value[s->sub] & ~(1u << (s->bit + 1)),
                                                                                          (uint8_t) (s->bit + 1), (uint8_t) s->sub,
-                                                                                         (uint8_t) s->sub), false);
+                                                                                         (uint8_t) s->sub), false, false);
                                                         if (step_answered(m)) {
                                                                 /* it was the silent step's: its bit is 0 */
                                                                 m->stats.late_answers++;
@@ -186,7 +187,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                         break;
                                 FASTSCAN_STEP(m, s,
                                              lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
-                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false);
+                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false, false);
                                 if (step_answered(m))
                                         break;
                                 /* Nobody matched, so the slaves still expect this

@@ -43,6 +43,8 @@ typedef struct lss_step {
         unsigned n_tx;
         int expect_cs;         /* -1: unconfirmed */
         bool discovery;        /* first contact: full configured wait */
+        bool silence_answers;  /* silence is an answer (a fastscan bit step): the
+                                * shorter wait (lss_timing.h, LSS_WAIT_BIT) */
         uint8_t bootup_node;
         uint32_t wait_us;      /* STEP_BOOTUP / STEP_DELAY */
         uint32_t late_us;      /* nonzero: this step's late guard instead of the rule's */

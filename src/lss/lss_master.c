@@ -191,7 +191,7 @@ static void finish(lss_master *m) {
         m->step.phase = PHASE_IDLE;
         m->result.devices = m->devices;
         m->result.n_devices = m->n_devices;
-        m->stats.timeout_us = lss_timing_wait(&m->timing, false);
+        m->stats.timeout_us = lss_timing_wait(&m->timing, LSS_WAIT_ANSWER);
         m->stats.latency_min_us = lss_timing_min(&m->timing);
         m->stats.latency_max_us = lss_timing_max(&m->timing);
 }

@@ -84,6 +84,8 @@ typedef struct lss_timing_config {
         bool adaptive;              /* derive the wait from measured answer latency */
         uint32_t floor_us;          /* adaptive: never wait less than this */
         uint32_t factor_pct;        /* adaptive: wait = factor * worst latency seen (150 = 1.5x) */
+        uint32_t bit_factor_pct;    /* the same for fastscan bit steps, where silence is an
+                                     * answer (0: factor_pct; never above it) */
         uint32_t guard_floor_us;    /* minimum answer guard and late guard */
         uint32_t bootup_timeout_us; /* wait for the boot-up that verifies an assignment */
         uint32_t bitrate;           /* bit/s of the bus, 0 = unknown (frame times then count as 0) */

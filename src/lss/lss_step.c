@@ -258,13 +258,19 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
         }
 }
 
+static enum lss_wait_kind step_wait_kind(const lss_step *s) {
+        if (s->discovery)
+                return LSS_WAIT_DISCOVERY;
+        return s->silence_answers ? LSS_WAIT_BIT : LSS_WAIT_ANSWER;
+}
+
 uint64_t step_deadline(const lss_master *m) {
         const lss_step *s = &m->step;
 
         switch (s->phase) {
         case PHASE_WAIT:
                 if (s->kind == STEP_LSS || s->kind == STEP_SDO)
-                        return s->sent_at + s->tx_us + s->busy_us + lss_timing_wait(&m->timing, s->discovery);
+                        return s->sent_at + s->tx_us + s->busy_us + lss_timing_wait(&m->timing, step_wait_kind(s));
                 return s->sent_at + s->tx_us + s->wait_us;
         case PHASE_ANSWER_GUARD:
         case PHASE_LATE_GUARD:
@@ -288,7 +294,7 @@ void step_on_time(lss_master *m, uint64_t now) {
                 }
                 m->stats.timeouts++;
                 s->phase = PHASE_LATE_GUARD;
-                s->end_at = d + (s->late_us ? s->late_us : lss_timing_late_guard(&m->timing, s->discovery));
+                s->end_at = d + (s->late_us ? s->late_us : lss_timing_late_guard(&m->timing, step_wait_kind(s)));
                 return;
         case PHASE_ANSWER_GUARD:
         case PHASE_LATE_GUARD:

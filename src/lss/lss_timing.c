@@ -9,6 +9,7 @@ void lss_timing_config_default(lss_timing_config *c) {
                 .adaptive = true,
                 .floor_us = 1000,
                 .factor_pct = 150,
+                .bit_factor_pct = 125,
                 .guard_floor_us = 300,
                 .bootup_timeout_us = 1000000,
                 .bitrate = 125000,
@@ -23,6 +24,10 @@ void lss_timing_init(lss_timing *t, const lss_timing_config *cfg) {
                 t->cfg.retries = 1;
         if (t->cfg.factor_pct < 100)
                 t->cfg.factor_pct = 100;
+        if (t->cfg.bit_factor_pct == 0 || t->cfg.bit_factor_pct > t->cfg.factor_pct)
+                t->cfg.bit_factor_pct = t->cfg.factor_pct;
+        if (t->cfg.bit_factor_pct < 100)
+                t->cfg.bit_factor_pct = 100;
 }
 
 void lss_timing_add_sample(lss_timing *t, uint32_t latency_us) {
@@ -53,11 +58,12 @@ uint32_t lss_timing_limit(const lss_timing *t) {
 }
 
 /* `patience`: whether the patience counts (the late guard leaves it out) */
-static uint32_t wait_up_to(const lss_timing *t, bool discovery, bool patience) {
+static uint32_t wait_up_to(const lss_timing *t, enum lss_wait_kind kind, bool patience) {
         uint32_t limit = patience ? lss_timing_limit(t) : t->cfg.timeout_us;
-        if (!t->cfg.adaptive || discovery || t->n_samples == 0)
+        if (!t->cfg.adaptive || kind == LSS_WAIT_DISCOVERY || t->n_samples == 0)
                 return limit;
-        uint64_t w = (uint64_t) lss_timing_max(t) * t->cfg.factor_pct / 100;
+        uint32_t factor = kind == LSS_WAIT_BIT ? t->cfg.bit_factor_pct : t->cfg.factor_pct;
+        uint64_t w = (uint64_t) lss_timing_max(t) * factor / 100;
         if (w < t->cfg.floor_us)
                 w = t->cfg.floor_us;
         if (patience && w < t->patience_us)
@@ -69,8 +75,8 @@ static uint32_t wait_up_to(const lss_timing *t, bool discovery, bool patience) {
         return (uint32_t) w;
 }
 
-uint32_t lss_timing_wait(const lss_timing *t, bool discovery) {
-        return wait_up_to(t, discovery, true);
+uint32_t lss_timing_wait(const lss_timing *t, enum lss_wait_kind kind) {
+        return wait_up_to(t, kind, true);
 }
 
 /* Each late answer lengthens the waits, and the next late answer comes
@@ -101,7 +107,7 @@ void lss_timing_on_answer(lss_timing *t, uint32_t latency_us, bool late) {
 }
 
 void lss_timing_on_stray(lss_timing *t) {
-        uint32_t w = wait_up_to(t, false, true);
+        uint32_t w = wait_up_to(t, LSS_WAIT_ANSWER, true);
         set_patience(t, 2ull * (w > t->patience_us ? w : t->patience_us));
 }
 
@@ -135,15 +141,15 @@ bool lss_timing_early(const lss_timing *t, uint32_t latency_us) {
         return fastest > 2 * slack && own * 4 < fastest * 3;
 }
 
-uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery) {
+uint32_t lss_timing_late_guard(const lss_timing *t, enum lss_wait_kind kind) {
         /* patience lengthens the wait, not this */
-        uint32_t g = wait_up_to(t, discovery, false) / 4;
+        uint32_t g = wait_up_to(t, kind, false) / 4;
         return g > t->cfg.guard_floor_us ? g : t->cfg.guard_floor_us;
 }
 
 uint32_t lss_timing_listen_guard(const lss_timing *t) {
-        uint32_t cap = lss_timing_patience_cap(t), wait = lss_timing_wait(t, true);
-        uint32_t rule = lss_timing_late_guard(t, true);
+        uint32_t cap = lss_timing_patience_cap(t), wait = lss_timing_wait(t, LSS_WAIT_DISCOVERY);
+        uint32_t rule = lss_timing_late_guard(t, LSS_WAIT_DISCOVERY);
         return cap > wait + rule ? cap - wait : rule;
 }
 

@@ -6,7 +6,9 @@
  *   limit              max(timeout, patience): the longest no-answer wait
  *   wait (no answer)   fixed: limit;
  *                      adaptive: min(limit, max(floor, factor * max, patience))
- *                      (limit until the first answer was measured)
+ *                      (limit until the first answer was measured); a step
+ *                      whose silence is an answer (a fastscan bit step)
+ *                      takes bit_factor instead of factor
  *   answer guard       after the first answer: max(guard_floor, max - min)
  *                      + one answer frame (a second responder's answer
  *                      queues behind the first on the wire)
@@ -60,11 +62,19 @@ uint32_t lss_timing_limit(const lss_timing *t);
 void lss_timing_on_answer(lss_timing *t, uint32_t latency_us, bool late);
 /* An LSS answer came that no step was waiting for (its step had ended). */
 void lss_timing_on_stray(lss_timing *t);
-/* The no-answer wait; `discovery` steps (first contact with unknown slaves)
- * always wait the configured timeout so that slow slaves get measured. */
-uint32_t lss_timing_wait(const lss_timing *t, bool discovery);
+/* What a step's silence means decides how long it is waited for. */
+enum lss_wait_kind {
+        LSS_WAIT_ANSWER,    /* silence is a failure (asked again, or an error): factor */
+        LSS_WAIT_BIT,       /* silence is an answer (a fastscan bit reads 1): bit_factor;
+                             * a late answer is caught as early in the next step */
+        LSS_WAIT_DISCOVERY, /* first contact with unknown slaves: the configured
+                             * timeout, so that slow slaves get measured */
+};
+
+/* The no-answer wait of a step of that kind. */
+uint32_t lss_timing_wait(const lss_timing *t, enum lss_wait_kind kind);
 uint32_t lss_timing_answer_guard(const lss_timing *t);
-uint32_t lss_timing_late_guard(const lss_timing *t, bool discovery);
+uint32_t lss_timing_late_guard(const lss_timing *t, enum lss_wait_kind kind);
 /* The longest wait patience may grow to: LSS_PATIENCE_FACTOR x timeout, at
  * most LSS_PATIENCE_MAX_US. */
 uint32_t lss_timing_patience_cap(const lss_timing *t);

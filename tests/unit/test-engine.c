@@ -678,9 +678,9 @@ START_TEST(patience_follows_late_answers) {
         ck_assert_uint_eq(lss_timing_limit(&t), 20000);
         lss_timing_on_answer(&t, 30000, true);
         ck_assert_uint_eq(lss_timing_limit(&t), 45000);
-        ck_assert_uint_eq(lss_timing_wait(&t, true), 45000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_DISCOVERY), 45000);
         /* the late guard does not grow with it */
-        ck_assert_uint_eq(lss_timing_late_guard(&t, true), 5000);
+        ck_assert_uint_eq(lss_timing_late_guard(&t, LSS_WAIT_DISCOVERY), 5000);
         lss_timing_on_stray(&t);
         ck_assert_uint_eq(lss_timing_limit(&t), 80000);
         lss_timing_on_stray(&t);
@@ -708,13 +708,41 @@ START_TEST(patience_follows_late_answers) {
          * came after its step ended (a latency spike) doubles the wait, not
          * the first-contact limit */
         lss_timing_add_sample(&t, 4000);
-        ck_assert_uint_eq(lss_timing_wait(&t, false), 6000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_ANSWER), 6000);
         lss_timing_on_stray(&t);
-        ck_assert_uint_eq(lss_timing_wait(&t, false), 12000);
-        ck_assert_uint_eq(lss_timing_wait(&t, true), 20000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_ANSWER), 12000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_DISCOVERY), 20000);
         lss_timing_on_stray(&t);
-        ck_assert_uint_eq(lss_timing_wait(&t, false), 24000);
-        ck_assert_uint_eq(lss_timing_late_guard(&t, false), 1500);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_ANSWER), 24000);
+        ck_assert_uint_eq(lss_timing_late_guard(&t, LSS_WAIT_ANSWER), 1500);
+}
+END_TEST
+
+/* What a step's silence means sets its wait: a silent fastscan bit step is
+ * an answer (1.25 x the slowest answer), other silences are failures (1.5 x),
+ * first contact waits the timeout. The bit factor is never above the other. */
+START_TEST(wait_by_kind) {
+        lss_timing_config c;
+        lss_timing_config_default(&c);
+        lss_timing t;
+        lss_timing_init(&t, &c);
+        lss_timing_add_sample(&t, 4000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_ANSWER), 6000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_BIT), 5000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_DISCOVERY), 20000);
+        ck_assert_uint_eq(lss_timing_late_guard(&t, LSS_WAIT_BIT), 1250);
+        ck_assert_uint_eq(lss_timing_late_guard(&t, LSS_WAIT_ANSWER), 1500);
+        /* patience lengthens both */
+        lss_timing_on_stray(&t);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_BIT), 12000);
+        c.bit_factor_pct = 200;
+        lss_timing_init(&t, &c);
+        lss_timing_add_sample(&t, 4000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_BIT), 6000);
+        c.bit_factor_pct = 0;
+        lss_timing_init(&t, &c);
+        lss_timing_add_sample(&t, 4000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_BIT), 6000);
 }
 END_TEST
 
@@ -743,6 +771,7 @@ int main(void) {
         tcase_add_test(tc, late_answer_in_guard_counts);
         tcase_add_test(tc, identify_services);
         tcase_add_test(tc, patience_follows_late_answers);
+        tcase_add_test(tc, wait_by_kind);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* Fastscan and enumeration of non-configured slaves: many slaves, known
  * fields, fault knobs, late and duplicated answers. */
+#include <inttypes.h>
 #include <stdio.h>
 
 #include "engine-util.h"
@@ -168,6 +169,60 @@ START_TEST(lone_slave_bits_end_at_answer) {
                 zeros += 31 - (unsigned) __builtin_popcount(lss_identity_field(id, i) >> 1);
         ck_assert_msg(g.quick == zeros, "%u of %u answered steps ended at the answer, %u bits read 0", g.quick,
                       g.answers, zeros);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* How long silent bit steps held the bus before the next request. */
+typedef struct silent_gaps {
+        uint64_t request_at;
+        bool bit, answered;
+        uint64_t bit_max; /* the longest gap after a silent bit step */
+        unsigned bits;
+} silent_gaps;
+
+static void time_silent_gaps(void *ud, const lss_frame *f, uint64_t t) {
+        silent_gaps *g = ud;
+        if (lss_is_response(f)) {
+                g->answered = true;
+                return;
+        }
+        if (!lss_is_request(f))
+                return;
+        if (g->request_at && !g->answered && g->bit) {
+                if (t - g->request_at > g->bit_max)
+                        g->bit_max = t - g->request_at;
+                g->bits++;
+        }
+        g->request_at = t;
+        g->answered = false;
+        /* a bit step asks about its own field (lss_next = lss_sub); the ping is bitcheck 0x80 */
+        g->bit = f->data[0] == LSS_CS_FASTSCAN && f->data[5] != 0x80 && f->data[6] == f->data[7];
+}
+
+/* A silent bit step is an answer (the bit reads 1): it waits 1.25 x the
+ * slowest answer, where other steps, whose silence is a failure, wait 1.5 x
+ * (docs/engine.md, Waiting). Before, a bit step waited as long as any. */
+START_TEST(silent_bit_steps_wait_less) {
+        lss_slave_faults f = faults_latency(2000, 0);
+        membus *b = bus_random(1, 11, 0, 0, &f);
+        silent_gaps g = { 0 };
+        membus_set_trace(b, time_silent_gaps, &g);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_fastscan(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert(lss_identity_equal(&r->id, &membus_slave(b, 0)->id));
+        /* the request, an answer of the step before that may precede it on
+         * the wire (no tx echo here), the wait and its late guard (a quarter
+         * of it): 6.9 ms at 125 kbit/s where 1.5 x would be 7.8 */
+        uint64_t l = lss_master_get_stats(m)->latency_max_us, frames = 2 * 1080;
+        uint64_t bit_wait = l * 125 / 100 * 5 / 4, answer_wait = l * 150 / 100 * 5 / 4;
+        ck_assert_uint_gt(g.bits, 20);
+        ck_assert_msg(g.bit_max <= frames + bit_wait + 300, "a silent bit step took %" PRIu64 " us, latency %" PRIu64,
+                      g.bit_max, l);
+        ck_assert_uint_lt(frames + bit_wait + 300, frames + answer_wait);
         lss_master_free(m);
         membus_free(b);
 }
@@ -593,6 +648,7 @@ int main(void) {
         TCase *tc = tcase_create("fastscan");
         tcase_set_timeout(tc, 120);
         tcase_add_test(tc, fastscan_one);
+        tcase_add_test(tc, silent_bit_steps_wait_less);
         tcase_add_test(tc, fastscan_nobody);
         tcase_add_test(tc, fastscan_beside_one_in_configuration);
         tcase_add_test(tc, fastscan_known_fields);
