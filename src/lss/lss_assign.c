@@ -78,6 +78,7 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                 if (!inquired_node_id_ok(m))
                         goto out;
                 s->old = m->result.node_id;
+                s->lone = m->step.n_frames == 1 && !m->step.void_;
         }
         if (s->old == s->node_id) {
                 /* Already right: nothing to configure, nothing to store —
@@ -115,15 +116,15 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                 m->result.changed = true;
                 goto dry;
         }
-        REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_configure_node_id(&f__, s->node_id),
-                        LSS_CS_CONFIGURE_NODE_ID);
+        REQUEST_RETRIED_ENDS(m, &s->tail_pc, s->attempt, lss_encode_configure_node_id(&f__, s->node_id),
+                             LSS_CS_CONFIGURE_NODE_ID, s->lone);
         if (!configure_answer_ok(m, s->node_id))
                 goto out;
         m->result.changed = true;
 
 store:
         if (s->flags & LSS_ASSIGN_STORE) {
-                REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
+                REQUEST_RETRIED_ENDS(m, &s->tail_pc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE, s->lone);
                 if (!store_answer_ok(m))
                         goto out;
         }

@@ -289,6 +289,7 @@ static int assign_direct(lss_master *m, lss_scan_state *s) {
                 }
                 m->as.old = s->node;
                 m->as.old_known = true;
+                m->as.lone = s->node_lone;
                 m->as.pc = 0;
                 PT_CALL(&s->dpc, proc_assign_selected(m, &m->as));
                 if (!m->result.in_use)
@@ -355,10 +356,12 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
         if (s->confirm == CONFIRM_OK) {
                 REQUEST_RETRIED(m, &s->hpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                                 LSS_CS_INQUIRE_NODE_ID);
-                if (step_answered(m) && !step_conflict(m))
+                if (step_answered(m) && !step_conflict(m)) {
                         s->node = m->step.answer.data[1];
-                else
+                        s->node_lone = m->step.n_frames == 1 && !m->step.void_;
+                } else {
                         s->confirm = CONFIRM_UNCLEAR;
+                }
         }
         if (s->confirm == CONFIRM_OK && (s->again = found_before(s, &s->found)) != NULL) {
                 /* Set aside, it still took part (a slave that answers

@@ -115,6 +115,9 @@ typedef struct lss_assign_state {
         lss_identity id;
         uint8_t node_id, old;
         bool old_known;         /* proc_assign_selected: `old` was just inquired, not asked again */
+        bool lone;              /* that inquiry heard one frame in its full answer guard: the
+                                 * Configure and Store answers are that slave's, their steps
+                                 * end at the answer (docs/engine.md, rule 4) */
         unsigned flags, attempt, field;
         bool selected;
         const bool *taken;      /* node-IDs known to be taken (128 entries), or NULL */
@@ -183,6 +186,7 @@ typedef struct lss_scan_state {
         unsigned looks;             /* silent fastscan pings in a row, each after a switch to waiting */
         enum lss_confirm confirm;
         uint8_t node, temp, next_temp;
+        bool node_lone;         /* `node` was inquired from one frame in the full guard */
         const bool *avoid;      /* 128 entries or NULL: node-IDs not to set anybody aside with */
         const lss_enum_direct *direct; /* NULL: nobody takes a node-ID during the enumeration */
         int dpc;
@@ -326,9 +330,11 @@ bool step_conflict(const lss_master *m);
                         break; \
                 (m)->stats.retries++; \
         }
-#define REQUEST_RETRIED(m, pc, attempt, frame_expr, cs) \
+#define REQUEST_RETRIED(m, pc, attempt, frame_expr, cs) REQUEST_RETRIED_ENDS(m, pc, attempt, frame_expr, cs, false)
+/* `at_answer`: the step ends at its first answer (lss_step.ends_at_answer) */
+#define REQUEST_RETRIED_ENDS(m, pc, attempt, frame_expr, cs, at_answer) \
         STEP_RETRIED(m, pc, attempt, { lss_frame f__; frame_expr; step_lss(m, cs); step_add_tx(m, &f__); \
-                                       step_start(m); })
+                                       m->step.ends_at_answer = (at_answer); step_start(m); })
 #define SELECT_RETRIED(m, pc, attempt, id) STEP_RETRIED(m, pc, attempt, step_selective(m, id))
 
 /* assign.c: the answer of the selected slave to Inquire Node-ID (sets

@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* Giving node-IDs: by known identity (selective switch) and by fastscan. */
+#include <inttypes.h>
+
 #include "engine-util.h"
 
 static const lss_identity ID1 = { 0x000000EC, 0x00001234, 0x00010002, 0x00001276 };
@@ -54,6 +56,52 @@ START_TEST(assign_non_configured) {
 END_TEST
 
 /* A configured slave takes the new ID at NMT Reset Communication. */
+/* How soon the request after a Configure Node-ID or Store answer followed. */
+typedef struct after_answer {
+        uint64_t answer_at;
+        uint64_t configure_gap, store_gap;
+        uint8_t cs;
+} after_answer;
+
+static void time_after_answer(void *ud, const lss_frame *f, uint64_t t) {
+        after_answer *a = ud;
+        if (lss_is_response(f)) {
+                a->answer_at = t;
+                a->cs = f->data[0];
+        } else if (lss_is_request(f) && a->answer_at) {
+                if (a->cs == LSS_CS_CONFIGURE_NODE_ID)
+                        a->configure_gap = t - a->answer_at;
+                else if (a->cs == LSS_CS_STORE)
+                        a->store_gap = t - a->answer_at;
+                a->answer_at = 0;
+        }
+}
+
+/* The Inquire Node-ID after the selective switch heard one slave alone (one
+ * frame in its full answer guard): the answers to Configure Node-ID and
+ * Store are that slave's, and the next request follows at once (its own
+ * frame time). Before, each waited the answer guard (the latency spread and
+ * an answer frame: ~1.4 ms here). */
+START_TEST(configure_and_store_end_at_their_answer) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        after_answer a = { 0 };
+        membus_set_trace(b, time_after_answer, &a);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 5);
+        /* a request of 8 bytes takes <= 135 bits, 1080 us at 125 kbit/s */
+        ck_assert_msg(a.configure_gap > 0 && a.configure_gap <= 1080, "Store %" PRIu64 " us after the answer",
+                      a.configure_gap);
+        ck_assert_msg(a.store_gap > 0 && a.store_gap <= 1080, "switch %" PRIu64 " us after the answer", a.store_gap);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 START_TEST(assign_configured) {
         membus *b = membus_new(125000);
         membus_add_slave(b, &ID1, 9, NULL);
@@ -607,6 +655,7 @@ int main(void) {
         TCase *tc = tcase_create("assign");
         tcase_set_timeout(tc, 120);
         tcase_add_test(tc, assign_non_configured);
+        tcase_add_test(tc, configure_and_store_end_at_their_answer);
         tcase_add_test(tc, assign_configured);
         tcase_add_test(tc, assign_failures);
         tcase_add_test(tc, assign_duplicate_identity);
