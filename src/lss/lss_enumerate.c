@@ -80,11 +80,25 @@ static void add_nmt(lss_master *m, enum nmt_cs cs, uint8_t node) {
         step_add_tx(m, &f);
 }
 
-/* Inquire Identity of the slave in configuration, against s->found. */
-int proc_confirm_found(lss_master *m, lss_scan_state *s) {
+/* Inquire Identity of the slave in configuration, against s->found. When a
+ * selective switch for F follows anyway (`serial_first`), it singles F out
+ * by its whole identity: the serial, the field finds differ in, is asked
+ * first, and the other fields only when it is not F's, to name the slave
+ * that answered. */
+int proc_confirm_found(lss_master *m, lss_scan_state *s, bool serial_first) {
         PT_BEGIN(&s->cpc);
         s->confirm = CONFIRM_OK;
         s->other = s->found;
+        if (serial_first) {
+                REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_SERIAL),
+                                LSS_CS_INQUIRE_VENDOR + LSS_FIELD_SERIAL);
+                if (!step_answered(m) || step_conflict(m)) {
+                        s->confirm = !step_answered(m) ? CONFIRM_NOBODY : CONFIRM_UNCLEAR;
+                        goto out;
+                }
+                if (lss_get_u32(m->step.answer.data + 1) == s->found.serial)
+                        goto out;
+        }
         for (s->field = 0; s->field < LSS_FIELD_COUNT; s->field++) {
                 REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_inquire(&f__, s->field),
                                 LSS_CS_INQUIRE_VENDOR + (int) s->field);
@@ -96,6 +110,7 @@ int proc_confirm_found(lss_master *m, lss_scan_state *s) {
         }
         if (s->confirm == CONFIRM_OK && !lss_identity_equal(&s->other, &s->found))
                 s->confirm = CONFIRM_OTHER;
+out:;
         PT_END(&s->cpc);
 }
 
@@ -325,7 +340,7 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
         s->cpc = 0;
         s->selected = s->took = false;
         if (s->n_kept == 0)
-                PT_CALL(&s->hpc, proc_confirm_found(m, s));
+                PT_CALL(&s->hpc, proc_confirm_found(m, s, !s->no_set_aside));
         if (s->confirm == CONFIRM_OTHER) {
                 /* Another identity answered. Two compliant slaves in
                  * configuration do that when one went there on a confirmation

@@ -370,8 +370,9 @@ int proc_enumerate(lss_master *m, lss_scan_state *s);
 /* probe.c: sets taken[id] or free[id] for every id of s->ids[0, n_ids) */
 int proc_probe(lss_master *m, lss_probe_state *s);
 /* enumerate.c: Inquire Identity of the slave in configuration against
- * s->found (s->confirm, s->other) */
-int proc_confirm_found(lss_master *m, lss_scan_state *s);
+ * s->found (s->confirm, s->other); `serial_first`: a selective switch for
+ * s->found follows, the serial alone when it is F's */
+int proc_confirm_found(lss_master *m, lss_scan_state *s, bool serial_first);
 /* everybody to waiting, then a selective switch to s->found (s->confirm) */
 int proc_confirm_by_selection(lss_master *m, lss_scan_state *s);
 int cand_add(lss_scan_state *s, const lss_identity *id);

@@ -435,7 +435,7 @@ static int proc_fastscan_top(lss_master *m) {
                 for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
                         lss_identity_set_field(&m->sc.found, i, m->fs.value[i]);
                 m->sc.cpc = 0;
-                PT_CALL(&m->pc, proc_confirm_found(m, &m->sc));
+                PT_CALL(&m->pc, proc_confirm_found(m, &m->sc, false));
                 m->sc.n_other = m->sc.confirm == CONFIRM_OTHER;
                 if (m->sc.confirm == CONFIRM_OTHER || m->sc.confirm == CONFIRM_UNCLEAR) {
                         /* Another identity or several answered: two slaves in

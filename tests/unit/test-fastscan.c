@@ -427,6 +427,32 @@ END_TEST
 START_TEST(enumerate_127) { enumerate_n(127, 7, false); enumerate_n(127, 8, true); }
 END_TEST
 
+static void count_identity_inquiries(void *ud, const lss_frame *f, uint64_t t) {
+        unsigned *by_field = ud;
+        if (lss_is_request(f) && f->data[0] >= LSS_CS_INQUIRE_VENDOR && f->data[0] <= LSS_CS_INQUIRE_VENDOR + 3)
+                by_field[f->data[0] - LSS_CS_INQUIRE_VENDOR]++;
+}
+
+/* A find is singled out by a selective switch for its whole identity before
+ * it is set aside: the inquiry before asks only the serial (the field finds
+ * differ in) when it is the find's. Before, all four fields. */
+START_TEST(find_confirmed_by_its_serial) {
+        membus *b = bus_random(8, 41, 0, 0, NULL);
+        unsigned by_field[LSS_FIELD_COUNT] = { 0 };
+        membus_set_trace(b, count_identity_inquiries, by_field);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->n_devices, 8);
+        assert_devices_real(b, r);
+        ck_assert_uint_eq(by_field[LSS_FIELD_SERIAL], 8);
+        ck_assert_uint_eq(by_field[LSS_FIELD_VENDOR] + by_field[LSS_FIELD_PRODUCT] + by_field[LSS_FIELD_REVISION], 0);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* Configured slaves are not found by fastscan, unless they deviate. */
 START_TEST(enumerate_skips_configured) {
         membus *b = bus_random(3, 21, 0, 0, NULL);
@@ -658,6 +684,7 @@ int main(void) {
         tcase_add_test(tc, enumerate_32);
         tcase_add_test(tc, enumerate_127);
         tcase_add_test(tc, enumerate_skips_configured);
+        tcase_add_test(tc, find_confirmed_by_its_serial);
         tcase_add_test(tc, enumerate_without_identify);
         tcase_add_test(tc, enumerate_refused_temporary);
         tcase_add_test(tc, enumerate_silent_and_nmt_stopped);
