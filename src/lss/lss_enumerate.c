@@ -511,7 +511,12 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 break;
                         }
                         /* slaves kept in configuration may answer every request */
-                        s->fs = (lss_fastscan_state) { .known = s->known, .others_answer = s->n_kept > 0 };
+                        /* A look again after a silent ping is for a slave that
+                         * lost it, or one that sat in configuration uncounted:
+                         * not slow ones, whose answers the first look, waiting
+                         * the timeout, took in (or made the waits patient). */
+                        s->fs = (lss_fastscan_state) { .known = s->known, .others_answer = s->n_kept > 0,
+                                                       .ping_again = s->looks > 0 };
                         /* A Scan that finds nobody says the bus is empty, and
                          * nothing checks that later: its ping may be answered by
                          * slaves slower than the timeout, after the step. */

@@ -78,7 +78,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                 s->after = AFTER_ANSWER;
                 m->final_repeated = false;
                 step_lss(m, LSS_CS_IDENTIFY_SLAVE);
-                m->step.discovery = true;
+                m->step.discovery = !s->ping_again || s->attempt > 0;
                 m->step.late_us = s->ping_late_us;
                 {
                         lss_frame f;

@@ -95,6 +95,8 @@ typedef struct lss_fastscan_state {
         bool found, none;          /* outcome: one slave in configuration / nobody there */
         bool silent;               /* none because nobody answered the ping: no slave is non-configured */
         uint32_t ping_late_us;     /* nonzero: the ping's late guard (lss_step.late_us) */
+        bool ping_again;           /* the ping repeats one that waited the timeout in silence:
+                                    * it waits as an answered step would (not first contact) */
         bool others_answer;        /* slaves kept in configuration may answer any request */
         bool lone;                 /* one slave alone answered a step: only it takes part now */
         bool lone_failed;          /* a field read while lone was not confirmed */

@@ -76,6 +76,7 @@ def test_canopennode():
         expect(not any(f[1] == 0x7E5 and f[2][0] == 0x17 for f in env.lss_frames('vcan0')), 'Scan stored something')
 
         # blind AutoAssign from the pool: every one gets a node-ID
+        start = len(env.lss_frames('vcan0'))
         changes, outcomes, result = timed(env, 'blind AutoAssign of 4', lambda: auto_assign(env))
         expect_eq(result, 'done', 'blind AutoAssign result')
         expect_eq(sorted(o[0] for o in outcomes.values()), ['pool'] * 4, 'blind AutoAssign outcomes')
@@ -83,6 +84,10 @@ def test_canopennode():
         got = {c[3]: c[5] for c in changes}
         expect_eq(ids, {s: (n, n) for s, n in got.items()}, 'the slaves have what the reply says')
         expect(len(set(got.values())) == 4 and all(20 <= n <= 40 for n in got.values()), 'pool node-IDs %r' % got)
+        # each takes its pool node-ID the moment it is found: one Configure
+        # Node-ID each, none set aside with a temporary node-ID and given 255 back
+        nodes = [f[2][1] for f in env.lss_frames('vcan0')[start:] if f[1] == 0x7E5 and f[2][0] == CS_CONFIGURE_NODE_ID]
+        expect_eq(sorted(nodes), sorted(got.values()), 'Configure Node-ID requests of the blind AutoAssign')
         expect(all_waiting(env, 'vcan0', four), 'AutoAssign left a slave in configuration')
         env.alive()
 

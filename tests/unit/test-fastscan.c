@@ -453,6 +453,54 @@ START_TEST(find_confirmed_by_its_serial) {
 }
 END_TEST
 
+/* The silent pings at the end of an enumeration and how long each took. */
+typedef struct silent_pings {
+        uint64_t ping_at;
+        bool answered;
+        uint64_t gap[8];
+        unsigned n;
+} silent_pings;
+
+static void time_silent_pings(void *ud, const lss_frame *f, uint64_t t) {
+        silent_pings *p = ud;
+        if (lss_is_response(f)) {
+                p->answered = true;
+                return;
+        }
+        if (!lss_is_request(f))
+                return;
+        if (p->ping_at && !p->answered && p->n < 8)
+                p->gap[p->n++] = t - p->ping_at;
+        else if (p->ping_at && p->answered)
+                p->n = 0; /* somebody answered: not the end yet */
+        p->ping_at = f->data[0] == LSS_CS_FASTSCAN && f->data[5] == 0x80 ? t : 0;
+        p->answered = false;
+}
+
+/* After the last find the pass pings retries + 1 times before it ends: the
+ * first ping waits the timeout (slow slaves answer it), the looks again are
+ * for a slave that lost it and wait as answered steps do. Before, each
+ * waited the timeout and its late guard (25 ms). */
+START_TEST(last_looks_wait_as_answered_steps) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = bus_random(4, 43, 0, 0, &f);
+        silent_pings p = { 0 };
+        membus_set_trace(b, time_silent_pings, &p);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_uint_eq(r->n_devices, 4);
+        /* the last ping's gap runs to the final switch to waiting */
+        ck_assert_uint_eq(p.n, 4);
+        ck_assert_uint_ge(p.gap[0], 20000);
+        for (unsigned i = 1; i < p.n; i++)
+                ck_assert_msg(p.gap[i] < 10000, "look %u took %" PRIu64 " us", i, p.gap[i]);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* Configured slaves are not found by fastscan, unless they deviate. */
 START_TEST(enumerate_skips_configured) {
         membus *b = bus_random(3, 21, 0, 0, NULL);
@@ -685,6 +733,7 @@ int main(void) {
         tcase_add_test(tc, enumerate_127);
         tcase_add_test(tc, enumerate_skips_configured);
         tcase_add_test(tc, find_confirmed_by_its_serial);
+        tcase_add_test(tc, last_looks_wait_as_answered_steps);
         tcase_add_test(tc, enumerate_without_identify);
         tcase_add_test(tc, enumerate_refused_temporary);
         tcase_add_test(tc, enumerate_silent_and_nmt_stopped);
