@@ -185,9 +185,21 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 }
                                 if (s->late_confirmed)
                                         break;
+                                /* a direct confirmation (the field known, or confirmed
+                                 * in an attempt before) asked again after a silent one */
+                                s->watch_next = s->after == AFTER_SILENT_CONFIRM;
                                 FASTSCAN_STEP(m, s,
                                              lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
                                                                  (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false, false);
+                                if (m->step.watch_early && (m->step.stale_answer || (step_answered(m) && m->step.early))) {
+                                        /* the confirmation before was answered late: the
+                                         * slaves moved on, this one may go unanswered */
+                                        m->stats.late_answers++;
+                                        if (m->step.early)
+                                                step_sample(m, late_latency(m, s));
+                                        s->late_confirmed = true;
+                                        break;
+                                }
                                 if (step_answered(m))
                                         break;
                                 /* Nobody matched, so the slaves still expect this

@@ -322,11 +322,14 @@ bool step_conflict(const lss_master *m);
              PT_YIELD(pc); } while (0)
 
 /* A step nobody answered is started again, up to cfg.retries more times:
- * a lost frame or a slow slave costs one timeout, not the procedure.
+ * a lost frame or a slow slave costs one timeout, not the procedure. The
+ * attempt after a silent one may get that one's late answer: it counts (the
+ * same request), its latency is no sample when it is early (lss_step.early).
  * `attempt` must be a field of the procedure's state. */
 #define STEP_RETRIED(m, pc, attempt, start_stmt) \
         for ((attempt) = 0;; (attempt)++) { \
                 start_stmt; \
+                (m)->step.watch_early = (attempt) > 0; \
                 PT_YIELD(pc); \
                 if (step_answered(m) || (attempt) >= (m)->timing.cfg.retries) \
                         break; \

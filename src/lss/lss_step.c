@@ -205,7 +205,12 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                         uint32_t latency = rx > s->sent_at + s->tx_us ? (uint32_t) (rx - s->sent_at - s->tx_us) : 0;
                         s->latency_us = latency;
                         s->early = s->watch_early && lss_timing_early(&m->timing, latency);
-                        if (!s->early) {
+                        /* a step after a silent one, before the window can tell
+                         * the step's own answer from the silent step's late one:
+                         * no sample (taken wrongly, it would be the fastest of the
+                         * window, and the early rule would miss late answers) */
+                        bool doubtful = s->watch_early && m->timing.n_samples < LSS_EARLY_MIN_SAMPLES;
+                        if (!s->early && !doubtful) {
                                 lss_timing_add_sample(&m->timing, latency);
                                 lss_timing_on_answer(&m->timing, latency,
                                                      s->phase == PHASE_LATE_GUARD && s->discovery);
