@@ -386,7 +386,9 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
 /* 4. a present device must not be called missing because an answer
  * came late (a loaded host, a slow device): what the map has and the
  * pass did not find is looked for again with every step waiting
- * several times longer, after another NMT Stop where asked */
+ * several times longer, after another NMT Stop where asked. Each step is
+ * asked twice: the first look asked retries + 1 times already, the second
+ * is for a slow answer (and a frame lost on the way, once). */
 static int second_look(lss_master *m, lss_aa_state *s) {
         PT_BEGIN(&s->l_pc);
         s->timing = m->timing.cfg;
@@ -394,6 +396,8 @@ static int second_look(lss_master *m, lss_aa_state *s) {
         m->timing.cfg.timeout_us = m->stats.patient_wait_us;
         m->timing.cfg.guard_floor_us = m->stats.patient_wait_us / 4;
         m->timing.cfg.adaptive = false;
+        if (m->timing.cfg.retries > 1)
+                m->timing.cfg.retries = 1;
         s->patient = true;
         if (stops(s)) {
                 STEP_REQUEST(m, &s->l_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);

@@ -403,6 +403,46 @@ START_TEST(one_ping_when_nobody_is_left) {
 }
 END_TEST
 
+typedef struct serial_asked {
+        uint32_t serial;
+        unsigned n;
+} serial_asked;
+
+static void count_selections_of(void *ud, const lss_frame *f, uint64_t t) {
+        serial_asked *a = ud;
+        (void) t;
+        if (lss_is_request(f) && f->data[0] == LSS_CS_SWITCH_SEL_SERIAL && lss_get_u32(f->data + 1) == a->serial)
+                a->n++;
+}
+
+/* A mapped device that is not there: the first look asks for it retries + 1
+ * times (4), the second look, patient, twice. Before, 4 times on the second
+ * look too: 0.4 s more a pass for each absent device at the default timing. */
+START_TEST(absent_device_asked_twice_on_second_look) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(1000, 300);
+        lss_identity here = { 0xEC, 0x1234, 0x00010002, 0x3000 }, absent = { 0xEC, 0x1234, 0x00010002, 0x3001 };
+        membus_add_slave(b, &here, LSS_NODE_ID_UNCONFIGURED, &f);
+        lss_map_entry map[2] = {
+                { .id = here, .revision_known = true, .node_id = 10 },
+                { .id = absent, .revision_known = true, .node_id = 11 },
+        };
+        serial_asked a = { absent.serial, 0 };
+        membus_set_trace(b, count_selections_of, &a);
+        lss_autoassign_plan p = { .map = map, .n_map = 2, .store = true };
+        lss_master *m = master_default();
+        const lss_result *r = run_pass(m, b, &p);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert_int_eq(outcome_of(m, &here)->kind, LSS_OUTCOME_ASSIGNED);
+        const lss_outcome *o = outcome_of(m, &absent);
+        ck_assert_int_eq(o->kind, LSS_OUTCOME_MISSING);
+        ck_assert_msg(strstr(o->message, "waits of 80 ms"), "%s", o->message);
+        ck_assert_uint_eq(a.n, 4 + 2);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* A device found by a scan (a map entry without revision: the revision
  * bisection finds it) and then silent to the selective switch (its answer
  * late under load) is looked for again on the second look, not reported
@@ -723,6 +763,7 @@ int main(void) {
         tcase_add_test(tc, pool_probed_together);
         tcase_add_test(tc, found_then_silent_is_looked_for_again);
         tcase_add_test(tc, store_lost_is_stored_on_second_look);
+        tcase_add_test(tc, absent_device_asked_twice_on_second_look);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
