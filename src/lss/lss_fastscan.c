@@ -191,7 +191,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 FASTSCAN_STEP(m, s,
                                              lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
                                                                  (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false, false);
-                                if (m->step.watch_early && (m->step.stale_answer || (step_answered(m) && m->step.early))) {
+                                if (m->step.watch_early &&
+                                    (m->step.stale_answer || (step_answered(m) && m->step.early))) {
                                         /* the confirmation before was answered late: the
                                          * slaves moved on, this one may go unanswered */
                                         m->stats.late_answers++;

@@ -134,7 +134,8 @@ static bool send_request(lss_master *m, lss_sdo_state *s, uint8_t node) {
         sl->sent_at = m->now;
         sl->wire_at = start + frame_us;
         s->last_wire_at = sl->wire_at + frame_us;
-        sl->deadline = sl->wire_at + (sl->sub == 1 ? first_contact_wait(m, s) : lss_timing_wait(&s->timing, LSS_WAIT_ANSWER));
+        sl->deadline = sl->wire_at +
+                       (sl->sub == 1 ? first_contact_wait(m, s) : lss_timing_wait(&s->timing, LSS_WAIT_ANSWER));
         if (sl->asked_at[sl->sub] == NO_TIME)
                 sl->asked_at[sl->sub] = m->now;
         else
@@ -358,7 +359,8 @@ int proc_sdo_discover(lss_master *m) {
                 }
                 /* a second, slower device's answer to the last requests, and
                  * late ones, may still come: the full wait */
-                s->guard_end = m->now + lss_timing_wait(&s->timing, LSS_WAIT_DISCOVERY) + lss_timing_answer_guard(&s->timing);
+                s->guard_end = m->now + lss_timing_wait(&s->timing, LSS_WAIT_DISCOVERY) +
+                               lss_timing_answer_guard(&s->timing);
                 while (s->done == s->total && m->now < s->guard_end) {
                         step_event(m, s->guard_end);
                         PT_YIELD(&s->pc);

@@ -208,7 +208,7 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
                         /* a step after a silent one, before the window can tell
                          * the step's own answer from the silent step's late one:
                          * no sample (taken wrongly, it would be the fastest of the
-                         * window, and the early rule would miss late answers) */
+                         * window) */
                         bool doubtful = s->watch_early && m->timing.n_samples < LSS_EARLY_MIN_SAMPLES;
                         if (!s->early && !doubtful) {
                                 lss_timing_add_sample(&m->timing, latency);

@@ -51,9 +51,10 @@ void lss_timing_add_sample(lss_timing *t, uint32_t latency_us);
 uint32_t lss_timing_max(const lss_timing *t);
 uint32_t lss_timing_min(const lss_timing *t);
 /* Sooner than 3/4 of the fastest answer of the window (once it holds
- * LSS_EARLY_MIN_SAMPLES; both without the answer's frame time): too soon
- * to be a slave's answer to the request just sent, as far as this bus has
- * shown. */
+ * LSS_EARLY_MIN_SAMPLES; both without the answer's frame time; the fastest
+ * but for the window's fastest eighth, which may be late answers taken
+ * for a step's own): too soon to be a slave's answer to the request just
+ * sent, as far as this bus has shown. */
 bool lss_timing_early(const lss_timing *t, uint32_t latency_us);
 /* The longest no-answer wait now: the timeout, or the patience if longer. */
 uint32_t lss_timing_limit(const lss_timing *t);
