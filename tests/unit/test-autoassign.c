@@ -417,7 +417,8 @@ static void count_selections_of(void *ud, const lss_frame *f, uint64_t t) {
 
 /* A mapped device that is not there: the first look asks for it retries + 1
  * times (4), the second look, patient, twice. Before, 4 times on the second
- * look too: 0.4 s more a pass for each absent device at the default timing. */
+ * look too: 0.4 s of every pass for each absent device at the default
+ * timing, 0.2 s now. */
 START_TEST(absent_device_asked_twice_on_second_look) {
         membus *b = membus_new(125000);
         lss_slave_faults f = faults_latency(1000, 300);

@@ -311,12 +311,13 @@ START_TEST(late_bit_answer_asked_again) {
 END_TEST
 
 /* A known field's confirmation (vendor and product known) answered after
- * its wait and late guard: the confirmation asked again takes that answer,
- * which waited behind the request, sooner than any slave answers. It is
- * the step before's, late: its latency from this request is no sample.
- * Before, it went into the window as the fastest answer (~1 ms where the
- * slave needs 2), and with it the early rule, which judges answers against
- * the fastest, missed the next late bit answer: a field read again. */
+ * its wait and late guard. The slave has moved on to the next field and
+ * does not answer the confirmation asked again; its late answer, before or
+ * in that one, confirms the field (before, at 2 ms late: "no device"). In
+ * the first steps the window cannot tell that answer from the step's own:
+ * it is no latency sample (before, at 3 ms late, the window's fastest was
+ * 1 ms where the slave needs 2, and the early rule, judged against it,
+ * would miss late bit answers). */
 START_TEST(late_answer_to_a_silent_step_is_no_sample) {
         unsigned cases = 0;
         for (uint32_t late = 500; late <= 6000; late += 250) {
