@@ -54,8 +54,9 @@ uint32_t lss_timing_min(const lss_timing *t) {
 }
 
 /* The fastest answer of the window but for its fastest eighth: a late
- * answer of a step before, taken for a step's own before the window could
- * tell (the first steps of a pass), must not make every answer look slow. */
+ * answer of a step before, sampled as a step's own (a straggler of a ping
+ * many slaves answered, in the step after it), must not let every late
+ * answer after it pass for a step's own. */
 static uint32_t fastest_of_most(const lss_timing *t) {
         uint32_t v[LSS_LATENCY_WINDOW];
         unsigned n = t->n_samples;
