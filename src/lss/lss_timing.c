@@ -53,23 +53,37 @@ uint32_t lss_timing_min(const lss_timing *t) {
         return t->n_samples ? m : 0;
 }
 
-/* The fastest answer of the window but for its fastest eighth: a late
- * answer of a step before, sampled as a step's own (a straggler of a ping
- * many slaves answered, in the step after it), must not let every late
- * answer after it pass for a step's own. */
-static uint32_t fastest_of_most(const lss_timing *t) {
+/* The k+1-th fastest (or slowest) latency of the window; k < n_samples. */
+static uint32_t ranked(const lss_timing *t, unsigned k, bool slowest) {
         uint32_t v[LSS_LATENCY_WINDOW];
         unsigned n = t->n_samples;
         memcpy(v, t->samples, n * sizeof(v[0]));
-        unsigned k = n / 8; /* the k+1-th fastest */
         for (unsigned i = 0; i <= k; i++)
                 for (unsigned j = i + 1; j < n; j++)
-                        if (v[j] < v[i]) {
+                        if (slowest ? v[j] > v[i] : v[j] < v[i]) {
                                 uint32_t x = v[i];
                                 v[i] = v[j];
                                 v[j] = x;
                         }
         return v[k];
+}
+
+/* The fastest answer of the window but for its fastest eighth: a late
+ * answer of a step before, sampled as a step's own (a straggler of a ping
+ * many slaves answered, in the step after it), must not let every late
+ * answer after it pass for a step's own. */
+static uint32_t fastest_of_most(const lss_timing *t) {
+        return ranked(t, t->n_samples / 8, false);
+}
+
+/* What a bit step's silence waits for: the slowest answer but one, once
+ * the window holds LSS_EARLY_MIN_SAMPLES. One answer stalled by the host
+ * lengthened every wait for the next LSS_LATENCY_WINDOW answers (~0.25 s
+ * in a VM pass of 3 s); a second stall in the window still does. A stall
+ * the wait misses is an answer in the next step: caught as early, or a
+ * bit read wrong that the field's confirmation finds. */
+static uint32_t bit_slowest(const lss_timing *t) {
+        return t->n_samples < LSS_EARLY_MIN_SAMPLES ? lss_timing_max(t) : ranked(t, 1, true);
 }
 
 uint32_t lss_timing_limit(const lss_timing *t) {
@@ -81,8 +95,8 @@ static uint32_t wait_up_to(const lss_timing *t, enum lss_wait_kind kind, bool pa
         uint32_t limit = patience ? lss_timing_limit(t) : t->cfg.timeout_us;
         if (!t->cfg.adaptive || kind == LSS_WAIT_DISCOVERY || t->n_samples == 0)
                 return limit;
-        uint32_t factor = kind == LSS_WAIT_BIT ? t->cfg.bit_factor_pct : t->cfg.factor_pct;
-        uint64_t w = (uint64_t) lss_timing_max(t) * factor / 100;
+        uint64_t w = kind == LSS_WAIT_BIT ? (uint64_t) bit_slowest(t) * t->cfg.bit_factor_pct / 100
+                                          : (uint64_t) lss_timing_max(t) * t->cfg.factor_pct / 100;
         if (w < t->cfg.floor_us)
                 w = t->cfg.floor_us;
         if (patience && w < t->patience_us)

@@ -8,7 +8,8 @@
  *                      adaptive: min(limit, max(floor, factor * max, patience))
  *                      (limit until the first answer was measured); a step
  *                      whose silence is an answer (a fastscan bit step)
- *                      takes bit_factor instead of factor
+ *                      takes bit_factor instead of factor, and the
+ *                      slowest but one for max (from LSS_EARLY_MIN_SAMPLES)
  *   answer guard       after the first answer: max(guard_floor, max - min)
  *                      + one answer frame (a second responder's answer
  *                      queues behind the first on the wire)

@@ -771,6 +771,27 @@ START_TEST(wait_by_kind) {
 }
 END_TEST
 
+/* One stalled answer in the window does not set the bit steps' waits, a
+ * second one does; the other steps' waits follow the slowest answer. */
+START_TEST(bit_wait_outlasts_one_stall) {
+        lss_timing_config c;
+        lss_timing_config_default(&c);
+        lss_timing t;
+        lss_timing_init(&t, &c);
+        lss_timing_add_sample(&t, 2000);
+        lss_timing_add_sample(&t, 9000);
+        /* too few samples to tell a stall: the slowest */
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_BIT), 11250);
+        for (unsigned i = 0; i < LSS_EARLY_MIN_SAMPLES; i++)
+                lss_timing_add_sample(&t, 2000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_BIT), 2500);
+        ck_assert_uint_eq(lss_timing_late_guard(&t, LSS_WAIT_BIT), 625);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_ANSWER), 13500);
+        lss_timing_add_sample(&t, 8000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_BIT), 10000);
+}
+END_TEST
+
 int main(void) {
         Suite *s = suite_create("engine");
         TCase *tc = tcase_create("services");
@@ -798,6 +819,7 @@ int main(void) {
         tcase_add_test(tc, identify_services);
         tcase_add_test(tc, patience_follows_late_answers);
         tcase_add_test(tc, wait_by_kind);
+        tcase_add_test(tc, bit_wait_outlasts_one_stall);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
