@@ -175,7 +175,10 @@ int proc_assign(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->pc);
         result_reset(m);
         m->result.id = s->id;
-        SELECT_RETRIED(m, &s->pc, s->attempt, &s->id);
+        /* asked again for a lost frame; a first look's device that was not
+         * heard twice is looked for again, patiently, at the pass's end */
+        STEP_RETRIED_UP_TO(m, &s->pc, s->attempt, s->first_look ? 1u : m->timing.cfg.retries,
+                           step_selective(m, &s->id));
         if (!step_answered(m)) {
                 master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER,
                                "no slave %08x:%08x:%08x:%08x answered the selective switch", s->id.vendor,

@@ -224,6 +224,7 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
                 m->as.taken = s->taken;
                 m->as.free = s->free;
                 m->as.unstored = unstored_now(s);
+                m->as.first_look = !s->patient;
                 PT_CALL(&s->d_pc, proc_assign(m, &m->as));
                 if (m->result.status != LSS_E_NOT_FOUND) {
                         s->handled[s->i] = true;
@@ -356,8 +357,10 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
                 if (m->cancelling)
                         break;
                 /* Every non-configured slave answers the ping, whatever its
-                 * identity: when nobody did, the enumerations left (other
-                 * vendors, blind) would only ask it again, a full wait each. */
+                 * identity: when nobody did at the end, after a switch to
+                 * waiting, and nobody was set aside (to get 255 back), the
+                 * enumerations left (other vendors, blind) would only ask it
+                 * again, a full wait each. */
                 if (m->sc.nobody)
                         break;
                 if (m->sc.misbehaving) {

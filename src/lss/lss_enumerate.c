@@ -540,7 +540,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 /* (a pass that found nobody, e.g. the map's devices
                                  * all handled, asks once, as an empty bus costs) */
                                 if (s->looks++ >= (finds_of(s) > 0 ? m->timing.cfg.retries : 0)) {
-                                        s->nobody = finds_of(s) == 0 && s->fs.silent;
+                                        /* set nobody aside: nobody gets 255 back */
+                                        s->nobody = s->n_cand == 0 && s->fs.silent;
                                         break;
                                 }
                                 /* Silence may be a slave that lost the ping (a frame lost

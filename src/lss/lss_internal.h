@@ -120,6 +120,8 @@ typedef struct lss_assign_state {
         bool lone;              /* that inquiry heard one frame in its full answer guard: the
                                  * Configure and Store answers are that slave's, their steps
                                  * end at the answer (docs/engine.md, rule 4) */
+        bool first_look;        /* an AutoAssign's first look for a map entry: its selective
+                                 * switch is asked at most twice, the second look asks again */
         unsigned flags, attempt, field;
         bool selected;
         const bool *taken;      /* node-IDs known to be taken (128 entries), or NULL */
@@ -179,7 +181,8 @@ typedef struct lss_scan_state {
         unsigned gb_try;
         bool selected;          /* this round confirmed by a selective switch (all went to waiting first) */
         bool misbehaving;       /* the pass ended on a slave that does not follow CiA 305 (result.id) */
-        bool nobody;            /* the pass found nobody and its ping was silent: no slave is non-configured */
+        bool nobody;            /* the pass ended on a silent ping and set nobody aside (nobody got
+                                 * 255 back at its end): no slave is non-configured */
         bool listen;            /* a Scan: a ping that would end a pass empty listens as long as patience may grow */
         uint64_t deadline;
         lss_identity found, other, phantom;
@@ -321,17 +324,18 @@ bool step_conflict(const lss_master *m);
         do { lss_frame f__; frame_expr; step_lss(m, cs); step_add_tx(m, &f__); step_start(m); \
              PT_YIELD(pc); } while (0)
 
-/* A step nobody answered is started again, up to cfg.retries more times:
+/* A step nobody answered is started again, up to cfg.retries (`most`) more times:
  * a lost frame or a slow slave costs one timeout, not the procedure. The
  * attempt after a silent one may get that one's late answer: it counts (the
  * same request), its latency is no sample when it is early (lss_step.early).
  * `attempt` must be a field of the procedure's state. */
-#define STEP_RETRIED(m, pc, attempt, start_stmt) \
+#define STEP_RETRIED(m, pc, attempt, start_stmt) STEP_RETRIED_UP_TO(m, pc, attempt, (m)->timing.cfg.retries, start_stmt)
+#define STEP_RETRIED_UP_TO(m, pc, attempt, most, start_stmt) \
         for ((attempt) = 0;; (attempt)++) { \
                 start_stmt; \
                 (m)->step.watch_early = (attempt) > 0; \
                 PT_YIELD(pc); \
-                if (step_answered(m) || (attempt) >= (m)->timing.cfg.retries) \
+                if (step_answered(m) || (attempt) >= (most)) \
                         break; \
                 (m)->stats.retries++; \
         }
