@@ -267,6 +267,8 @@ struct lss_master {
         lss_frame final_answer;   /* the last answer that ended its step at once (step.ends_at_answer) */
         uint64_t answers_until;   /* further answers to that step may be on the wire until then */
         bool final_repeated;      /* the same answer came again within that time */
+        uint64_t strays_until;    /* stray answers until then are of the stall that last
+                                   * lengthened the waits (step_on_stray) */
 
         lss_result result;
         lss_device *devices;

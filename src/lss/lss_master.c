@@ -223,7 +223,7 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
         m->cancelling = false;
         m->sc.restore = false;
         if (now < m->now) /* a caller's clock that went back: no estimate holds */
-                m->wire_until = m->answers_until = 0;
+                m->wire_until = m->answers_until = m->strays_until = 0;
         m->now = now;
         m->n_devices = 0;
         m->n_announced = 0;

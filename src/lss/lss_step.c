@@ -155,7 +155,14 @@ void step_on_stray(lss_master *m, const lss_frame *f) {
         if (m->step.watch_early && step_matches(&m->step, f))
                 m->step.stale_answer = true;
         m->stats.stray_answers++;
+        /* One stall of the host delays every answer it holds: a crowded
+         * step's come late together, and each doubling the waits took a
+         * VM pass (8 slaves) to the cap, 80 ms a silent step for seconds.
+         * Those within the wait the first one set are the same sign. */
+        if (m->now < m->strays_until)
+                return;
         lss_timing_on_stray(&m->timing);
+        m->strays_until = m->now + lss_timing_wait(&m->timing, LSS_WAIT_ANSWER);
         note_patience(m);
 }
 

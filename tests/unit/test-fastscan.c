@@ -722,6 +722,37 @@ START_TEST(foreign_answers_leave_waits_alone) {
 }
 END_TEST
 
+/* One stall of the host holds every answer it catches: a crowded step's
+ * come late together. They are one sign that the waits are short, and
+ * lengthen them once; a stray after the wait that set is another. Before,
+ * each doubled the waits: a burst in a VM pass of 8 slaves took them to
+ * the cap, 80 ms a silent bit step for seconds. */
+START_TEST(late_answers_of_one_stall_count_once) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = bus_random(0, 81, 0, 0, &f);
+        lss_master *m = master_default();
+        /* nobody answers: the ping is the fastscan step asked last */
+        ck_assert_int_eq(lss_master_fastscan(m, NULL, membus_now(b)), 0);
+        ck_assert_int_eq(run(m, b)->status, LSS_E_NOT_FOUND);
+        const lss_master_stats *st = lss_master_get_stats(m);
+        ck_assert_uint_eq(st->patience_us, 0);
+        lss_frame late;
+        lss_frame_response(&late, LSS_CS_IDENTIFY_SLAVE);
+        uint64_t t = membus_now(b) + 1000;
+        lss_master_on_frame(m, &late, t);
+        uint32_t once = st->patience_us;
+        ck_assert_uint_eq(once, 40000); /* twice the wait in force: the timeout, no sample yet */
+        for (unsigned k = 1; k <= 3; k++)
+                lss_master_on_frame(m, &late, t + 300 * k);
+        ck_assert_uint_eq(st->patience_us, once);
+        ck_assert_uint_eq(st->stray_answers, 4);
+        lss_master_on_frame(m, &late, t + once + 1);
+        ck_assert_uint_eq(st->patience_us, 2 * once);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* Each fake is an answer no step could take, which makes the engine more
  * patient (docs/engine.md), and longer waits take in more of the fakes: at
  * one fake per 40 deadlines the enumeration still finds every slave; at one
@@ -781,6 +812,7 @@ int main(void) {
         tcase_add_test(tc, enumerate_duplicate_answers);
         tcase_add_test(tc, enumerate_with_late_answers);
         tcase_add_test(tc, foreign_answers_leave_waits_alone);
+        tcase_add_test(tc, late_answers_of_one_stall_count_once);
         tcase_add_test(tc, lone_slave_bits_end_at_answer);
         tcase_add_test(tc, merged_answers_cost_a_retry);
         tcase_add_test(tc, late_bit_answer_asked_again);
