@@ -377,7 +377,8 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
                  * after the wait entered configuration state uncounted and
                  * sat out the rest of that enumeration; the switch to waiting
                  * at its end freed it. So scan blind again while a blind
-                 * enumeration still gave somebody a node-ID. */
+                 * enumeration still gave somebody a node-ID (and did not end
+                 * on silent pings after a switch to waiting: `nobody` above). */
                 if (s->pair == s->plan->n_map && aa_count_given(s) > s->given_before &&
                     ++s->blind_passes < LSS_NODE_ID_MAX)
                         s->pair--; /* the loop's ++ comes back to the blind enumeration */

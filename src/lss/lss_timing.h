@@ -20,7 +20,8 @@
  *                      answer to a discovery step raises it to 1.5 x its
  *                      latency (the other steps' waits follow `max`); an LSS
  *                      answer no step could take (it came after its step
- *                      had ended) doubles the wait; after
+ *                      had ended) doubles the wait (once for the strays
+ *                      of one stall: step_on_stray); after
  *                      LSS_LATENCY_WINDOW answers in a row within half of
  *                      it, it is halved. At most LSS_PATIENCE_FACTOR x timeout, never
  *                      above LSS_PATIENCE_MAX_US.
