@@ -478,7 +478,8 @@ typedef struct deaf_twice {
 static void hears_third_selection(void *ud, const lss_frame *f, uint64_t t) {
         deaf_twice *d = ud;
         (void) t;
-        if (lss_is_request(f) && f->data[0] == LSS_CS_SWITCH_SEL_SERIAL && lss_get_u32(f->data + 1) == d->slave->id.serial)
+        if (lss_is_request(f) && f->data[0] == LSS_CS_SWITCH_SEL_SERIAL &&
+            lss_get_u32(f->data + 1) == d->slave->id.serial)
                 d->slave->faults.ignore_cs = ++d->asked <= 2 ? LSS_CS_SWITCH_SEL_SERIAL : -1;
 }
 
