@@ -102,6 +102,43 @@ START_TEST(configure_and_store_end_at_their_answer) {
 }
 END_TEST
 
+/* A retried step watches for early answers (STEP_RETRIED). The first
+ * Inquire Node-ID's answer comes 6 ms after it, past its wait and late
+ * guard, while the retry is on the wire: it queues behind the retry and
+ * arrives one frame time (984 us) after it. The retry takes it (the same
+ * request), but as no latency sample: sampled, it made the window's
+ * fastest answer 984 us against the slave's 1992. */
+typedef struct slow_first_inquiry {
+        lss_slave *slave;
+        unsigned asked;
+} slow_first_inquiry;
+
+static void slow_first_inquiry_trace(void *ud, const lss_frame *f, uint64_t t) {
+        slow_first_inquiry *s = ud;
+        (void) t;
+        if (lss_is_request(f) && f->data[0] == LSS_CS_INQUIRE_NODE_ID)
+                s->slave->faults.latency_us = ++s->asked == 1 ? 6000 : 1000;
+}
+
+START_TEST(late_answer_in_a_retry_is_no_sample) {
+        lss_slave_faults f = faults_latency(1000, 0);
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        slow_first_inquiry s = { membus_slave(b, 0), 0 };
+        membus_set_trace(b, slow_first_inquiry_trace, &s);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 5);
+        const lss_master_stats *st = lss_master_get_stats(m);
+        ck_assert_uint_ge(st->retries, 1);
+        ck_assert_msg(st->latency_min_us > 1500, "fastest answer %u us", (unsigned) st->latency_min_us);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 START_TEST(assign_configured) {
         membus *b = membus_new(125000);
         membus_add_slave(b, &ID1, 9, NULL);
@@ -656,6 +693,7 @@ int main(void) {
         tcase_set_timeout(tc, 120);
         tcase_add_test(tc, assign_non_configured);
         tcase_add_test(tc, configure_and_store_end_at_their_answer);
+        tcase_add_test(tc, late_answer_in_a_retry_is_no_sample);
         tcase_add_test(tc, assign_configured);
         tcase_add_test(tc, assign_failures);
         tcase_add_test(tc, assign_duplicate_identity);
