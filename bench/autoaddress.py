@@ -265,10 +265,13 @@ def main():
 
 
 def run_cases(a, impl, lssd, ns, modes, reps, failures):
-    for n in ns:
-        for mode in modes:
-            runs = []
-            for rep in range(reps):
+    """The repetitions go round the cases (every case's first, then every
+    case's second, ...): a minute of a loaded host costs one repetition of
+    several cases, not every repetition of one. Saved after every round."""
+    runs = {(n, mode): [] for n in ns for mode in modes}
+    for rep in range(reps):
+        for n in ns:
+            for mode in modes:
                 try:
                     r = run_lssd(mode, n, rep, a.impl == 'lssd-sim', a.hog) if lssd else run_canopen(n, rep)
                 except bl.BenchFailure as e:
@@ -281,11 +284,12 @@ def run_cases(a, impl, lssd, ns, modes, reps, failures):
                     bl.log(traceback.format_exc())
                     r = {'failed': repr(e)}
                 r.update(rep=rep, seed=bl.seed_of(n, rep))
-                runs.append(r)
+                runs[(n, mode)].append(r)
                 bl.log('%-7s %-7s N=%-3d rep %d: %s' % (impl, mode, n, rep, ' '.join(
                     '%s=%s' % (k, ('%.4g' % v) if isinstance(v, float) else v) for k, v in sorted(r.items()))))
+        for (n, mode), case_runs in runs.items():
             bl.save('autoaddress-%s-%s-n%d' % (impl, mode, n),
-                    {'impl': impl, 'mode': mode, 'n': n, 'reps': reps, 'runs': runs,
+                    {'impl': impl, 'mode': mode, 'n': n, 'reps': len(case_runs), 'runs': case_runs,
                      'hog_processes': os.cpu_count() if a.hog else 0,
                      'description': MODES.get(mode, 'python-canopen fast_scan loop, its defaults'),
                      'latency_ms': bl.LATENCY_MS, 'jitter_ms': bl.JITTER_MS})

@@ -13,7 +13,13 @@ Per mode, N and repetition, two fresh set-ups:
   alone     AutoAssign on vcan0, then on vcan1, ... one at a time: each bus's
             time alone; "slowest alone" is the largest of them;
   parallel  AutoAssign on every bus at once (one D-Bus connection and call per
-            bus, sent together): the time until the last reply.
+            bus, sent one after the other from one thread): the time from the
+            first call sent to the last reply read.
+
+A call's time runs from its send to its reply read off the socket. The
+repetitions go round the cases (every case's first, then every case's
+second, ...): a minute of a loaded host costs one repetition of several
+cases, not every repetition of one.
 
 ratio = parallel / slowest alone (the target: about 1x). After every call
 each slave's state file must hold the expected node-ID (active and stored,
@@ -27,7 +33,6 @@ import os
 import shutil
 import subprocess
 import sys
-import threading
 import time
 import traceback
 
@@ -80,25 +85,33 @@ def one_setup(mode, n, rep, buses, parallel):
             sys0 = bl.system_cpu()
             w0 = time.time()
 
-            def call(b, t0):
+            def send(b):
+                return conns[b].send(SERVICE, bus_path(buses[b]), BUS_IFACE, 'AutoAssign', 'a{sv}', [{}])
+
+            def wait(b, serial, t0):
+                # timed from the send to the moment the reply was read (each
+                # connection's reader thread): no client thread start-up or
+                # reply handling in it, a 0.2 s pass is timed as lssd took it
                 try:
-                    replies[b] = conns[b].call(SERVICE, bus_path(buses[b]), BUS_IFACE, 'AutoAssign', 'a{sv}',
-                                               [{}], timeout=1800)[0]
+                    body, got = conns[b].wait_reply(serial, 1800, timed=True)
+                    replies[b] = body[0]
+                    times[b] = got - t0
                 except Exception as e:  # noqa: BLE001
                     errors[b] = repr(e)
-                times[b] = time.monotonic() - t0
+                    times[b] = time.monotonic() - t0
 
             if parallel:
+                # one thread sends every call, one after the other (a few ms
+                # under TCG): the time runs from the first send to the last reply
                 t0 = time.monotonic()
-                threads = [threading.Thread(target=call, args=(b, t0)) for b in buses]
-                for t in threads:
-                    t.start()
-                for t in threads:
-                    t.join()
-                total = time.monotonic() - t0
+                serials = {b: send(b) for b in buses}
+                for b in buses:
+                    wait(b, serials[b], t0)
+                total = max(times.values())
             else:
                 for b in buses:
-                    call(b, time.monotonic())
+                    t0 = time.monotonic()
+                    wait(b, send(b), t0)
                 total = sum(times.values())
             w1 = time.time()
             cpu = bl.proc_cpu_s(env.lssd.pid) - cpu0
@@ -131,6 +144,31 @@ def one_setup(mode, n, rep, buses, parallel):
             raise
 
 
+def one_rep(mode, n, rep, buses, failures):
+    """One repetition of a case: its alone and its parallel set-up."""
+    r = {'rep': rep, 'seed': bl.seed_of(n, rep)}
+    for kind in ('alone', 'parallel'):
+        try:
+            r[kind] = one_setup(mode, n, rep, buses, kind == 'parallel')
+        except bl.BenchFailure as e:
+            failures.append(str(e))
+            bl.record_failure(str(e))
+            bl.log('!!!! MIS-ASSIGNMENT / WRONG RESULT: %s' % e)
+            r['failed'] = str(e)
+        except Exception as e:  # noqa: BLE001
+            failures.append('parallel %s %s N=%d rep %d: %r' % (kind, mode, n, rep, e))
+            bl.log(traceback.format_exc())
+            r['failed'] = repr(e)
+    if 'failed' not in r:
+        r['slowest_alone_s'] = max(r['alone']['bus_s'])
+        r['parallel_s'] = r['parallel']['total_s']
+        r['ratio'] = r['parallel_s'] / r['slowest_alone_s']
+        bl.log('parallel %-7s N=%-3d rep %d: alone %s s, all %d at once %s s (%.2fx)' % (
+            mode, n, rep, '/'.join('%.2f' % t for t in r['alone']['bus_s']), len(buses),
+            '/'.join('%.2f' % t for t in r['parallel']['bus_s']), r['ratio']))
+    return r
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument('--n', default='8,32', help='comma-separated slave counts per bus (default 8,32)')
@@ -151,34 +189,16 @@ def main():
     created = ensure_ifaces(buses.values())
     failures = []
     try:
-        for n in ns:
-            for mode in modes:
-                runs = []
-                for rep in range(a.reps):
-                    r = {'rep': rep, 'seed': bl.seed_of(n, rep)}
-                    for kind in ('alone', 'parallel'):
-                        try:
-                            r[kind] = one_setup(mode, n, rep, buses, kind == 'parallel')
-                        except bl.BenchFailure as e:
-                            failures.append(str(e))
-                            bl.record_failure(str(e))
-                            bl.log('!!!! MIS-ASSIGNMENT / WRONG RESULT: %s' % e)
-                            r['failed'] = str(e)
-                        except Exception as e:  # noqa: BLE001
-                            failures.append('parallel %s %s N=%d rep %d: %r' % (kind, mode, n, rep, e))
-                            bl.log(traceback.format_exc())
-                            r['failed'] = repr(e)
-                    if 'failed' not in r:
-                        r['slowest_alone_s'] = max(r['alone']['bus_s'])
-                        r['parallel_s'] = r['parallel']['total_s']
-                        r['ratio'] = r['parallel_s'] / r['slowest_alone_s']
-                        bl.log('parallel %-7s N=%-3d rep %d: alone %s s, all %d at once %s s (%.2fx)' % (
-                            mode, n, rep, '/'.join('%.2f' % t for t in r['alone']['bus_s']), len(buses),
-                            '/'.join('%.2f' % t for t in r['parallel']['bus_s']), r['ratio']))
-                    runs.append(r)
+        runs = {(n, mode): [] for n in ns for mode in modes}
+        for rep in range(a.reps):
+            for n in ns:
+                for mode in modes:
+                    runs[(n, mode)].append(one_rep(mode, n, rep, buses, failures))
+            # saved after every round: an aborted bench keeps what it measured
+            for (n, mode), case_runs in runs.items():
                 bl.save('parallel-%s-n%d' % (mode, n),
-                        {'impl': 'lssd-parallel', 'mode': mode, 'n': n, 'reps': a.reps, 'buses': list(buses.values()),
-                         'runs': runs, 'description': aa.MODES[mode],
+                        {'impl': 'lssd-parallel', 'mode': mode, 'n': n, 'reps': len(case_runs),
+                         'buses': list(buses.values()), 'runs': case_runs, 'description': aa.MODES[mode],
                          'latency_ms': bl.LATENCY_MS, 'jitter_ms': bl.JITTER_MS})
     finally:
         for ifname in created:

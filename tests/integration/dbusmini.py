@@ -280,7 +280,8 @@ class Connection:
         self.sock.sendall(msg.encode())
         return serial
 
-    def wait_reply(self, serial, timeout=300):
+    def wait_reply(self, serial, timeout=300, timed=False):
+        """The reply's body; timed: (body, when it was read off the socket, time.monotonic())."""
         deadline = time.monotonic() + timeout
         with self.lock:
             while serial not in self.replies:
@@ -293,7 +294,7 @@ class Connection:
             msg = self.replies.pop(serial)
         if msg.type == ERROR:
             raise DBusError(msg.error_name, msg.body[0] if msg.body else '')
-        return msg.body
+        return (msg.body, msg.received) if timed else msg.body
 
     def call(self, dest, path, iface, member, signature='', body=(), timeout=300):
         return self.wait_reply(self.send(dest, path, iface, member, signature, body), timeout)
