@@ -483,7 +483,7 @@ static bool rounds_exhausted(const lss_master *m, const lss_scan_state *s) {
 int proc_enumerate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
-        s->misbehaving = s->nobody = false;
+        s->misbehaving = s->nobody = s->pinged = false;
         for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
                 s->n_cand = s->n_direct = s->n_aside = s->n_kept = 0;
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
@@ -536,10 +536,12 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         m->prog_span = s->prog_span0;
                         if (m->cancelling)
                                 break;
+                        s->pinged = s->pinged || s->fs.heard;
                         if (s->fs.none) {
                                 /* (a pass that found nobody, e.g. the map's devices
-                                 * all handled, asks once, as an empty bus costs) */
-                                if (s->looks++ >= (finds_of(s) > 0 ? m->timing.cfg.retries : 0)) {
+                                 * all handled, asks once, as an empty bus costs;
+                                 * not when a ping was answered: a slave is there) */
+                                if (s->looks++ >= (finds_of(s) > 0 || s->pinged ? m->timing.cfg.retries : 0)) {
                                         /* set nobody aside: nobody gets 255 back */
                                         s->nobody = s->n_cand == 0 && s->fs.silent;
                                         break;

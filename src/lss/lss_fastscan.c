@@ -7,7 +7,9 @@
  * confirmation fails is retried from a new ping, with the fields confirmed
  * so far confirmed directly; if such a field fails too, everything is scanned
  * again. A guess (vendor, product, revision of the last find) is confirmed
- * directly before a field is scanned; scanned when nobody confirms it.
+ * directly before a field is scanned; scanned when nobody confirms it. A
+ * run of silent bits is checked on the way (check_field_read): a bit read
+ * wrong is searched for, not the whole field read again.
  * Nothing is reported found unless all four confirmations succeeded (a
  * late answer counts, below); callers check the identity again by inquiry
  * before configuring anything. */
@@ -39,11 +41,12 @@ static void judge_lone(lss_master *m, lss_fastscan_state *s) {
 /* `unguarded`: the step may end at its answer when one slave alone takes
  * part. `bit`: a bit step, whose silence is an answer (the shorter wait).
  * A bit step after a silent one watches for an early answer (below). */
-#define FASTSCAN_STEP(m, s, frame_expr, unguarded, bit) \
+#define FASTSCAN_STEP(m, s, frame_expr, unguarded, bit) FASTSCAN_STEP_AT(m, s, &(s)->pc, frame_expr, unguarded, bit)
+#define FASTSCAN_STEP_AT(m, s, pc, frame_expr, unguarded, bit) \
         do { lss_frame f__; frame_expr; step_lss(m, LSS_CS_IDENTIFY_SLAVE); step_add_tx(m, &f__); \
              m->step.ends_at_answer = (s)->lone && (unguarded); m->step.silence_answers = (bit); \
              m->step.watch_early = (s)->watch_next; (s)->watch_next = false; \
-             step_start(m); PT_YIELD(&(s)->pc); \
+             step_start(m); PT_YIELD(pc); \
              judge_lone(m, s); (s)->before_sent_us = (s)->sent_us; \
              (s)->sent_us = m->step.sent_at + m->step.tx_us; (s)->after = AFTER_ANSWER; } while (0)
 
@@ -59,6 +62,109 @@ static uint32_t late_latency(const lss_master *m, const lss_fastscan_state *s) {
         return l > UINT32_MAX ? UINT32_MAX : (uint32_t) l;
 }
 
+static uint32_t low_bits(int n) {
+        return n >= 32 ? UINT32_MAX : (1u << n) - 1;
+}
+
+static int fs_mid(const lss_fastscan_state *s) {
+        return (s->match_lo + s->match_hi) / 2;
+}
+
+/* Asked after LSS_FASTSCAN_CHECK_RUN silent bit steps in a row (s->bit the
+ * last): does anybody match the bits as read? If nobody does, one above was
+ * read wrong (a late answer missed, a straggler taken), and the longest
+ * prefix somebody has ends just above it: found by asking shorter prefixes
+ * (the answer wait: a silence taken too early here flips a right bit), it
+ * costs a few steps instead of every bit after it, a confirmation and the
+ * field read again. Answers out of step meanwhile (early, stale, strays: a
+ * slave whose answers queue behind a stalled one) leave it unfound, and the
+ * read goes on as before. */
+static int check_field_read(lss_master *m, lss_fastscan_state *s) {
+        PT_BEGIN(&s->check_pc);
+        s->check = CHECK_HELD;
+        s->silent_run = 0;
+        FASTSCAN_STEP_AT(m, s, &s->check_pc,
+                         lss_encode_fastscan(&f__, s->value[s->sub], (uint8_t) s->bit, (uint8_t) s->sub,
+                                             (uint8_t) s->sub), false, false);
+        if (step_answered(m))
+                goto out;
+        m->stats.retries++;
+        s->searches++;
+        s->lone_failed = s->lone_failed || s->lone;
+        s->lone = false;
+        s->check = CHECK_DOUBT;
+        s->search_strays = m->stats.stray_answers;
+        s->match_lo = s->bit;
+        s->match_hi = 32 - (int) s->known.known_bits[s->sub];
+        while (s->match_hi - s->match_lo > 1) {
+                s->watch_next = true;
+                FASTSCAN_STEP_AT(m, s, &s->check_pc,
+                                 lss_encode_fastscan(&f__, s->value[s->sub] & ~low_bits(fs_mid(s)), (uint8_t) fs_mid(s),
+                                                     (uint8_t) s->sub, (uint8_t) s->sub), false, false);
+                if (m->step.stale_answer || (step_answered(m) && m->step.early))
+                        goto out;
+                if (step_answered(m))
+                        s->match_hi = fs_mid(s);
+                else
+                        s->match_lo = fs_mid(s);
+        }
+        if (m->stats.stray_answers != s->search_strays)
+                goto out;
+        if (s->match_hi == 32 - (int) s->known.known_bits[s->sub]) {
+                /* not even the first bit, either way: nobody takes part in
+                 * this field now (the confirmation before it was a
+                 * straggler's, or a stalled slave's answers queue) */
+                s->check = CHECK_NOBODY;
+                goto out;
+        }
+        /* flipped, that bit matches them; the bits below are read again */
+        s->check = CHECK_FIXED;
+        s->bit = s->match_hi - 1;
+        s->value[s->sub] = (s->value[s->sub] ^ (1u << s->bit)) & ~low_bits(s->bit);
+        s->after = AFTER_ANSWER;
+out:;
+        PT_END(&s->check_pc);
+}
+
+/* A field's confirmation (bitcheck 0, LSSNext the next field), watched
+ * after a silent step. A direct confirmation asked again after a silent one
+ * takes that one's late answer as confirming (the slaves moved on). After
+ * the last bit read silent, an early answer is that bit's, late, or the
+ * confirmation's own: taken for the confirmation's when it was the bit's,
+ * it confirmed a field nobody has, and nobody took part in the next (in VM
+ * candumps about one pass in ten, 0.15-0.5 s each). So that bit is asked
+ * again: answered, it reads 0 and the field is confirmed again; silent, the
+ * slaves moved on with the confirmation: confirmed. */
+static int confirm_field(lss_master *m, lss_fastscan_state *s) {
+        PT_BEGIN(&s->confirm_pc);
+        for (;;) {
+                s->confirm_after = s->after;
+                s->watch_next = s->after != AFTER_ANSWER;
+                FASTSCAN_STEP_AT(m, s, &s->confirm_pc,
+                                 lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
+                                                     (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false, false);
+                if (!m->step.watch_early || !(m->step.stale_answer || (step_answered(m) && m->step.early)))
+                        break;
+                if (s->confirm_after == AFTER_SILENT_CONFIRM) {
+                        m->stats.late_answers++;
+                        if (m->step.early)
+                                step_sample(m, late_latency(m, s));
+                        s->late_confirmed = true;
+                        break;
+                }
+                FASTSCAN_STEP_AT(m, s, &s->confirm_pc,
+                                 lss_encode_fastscan(&f__, s->value[s->sub] & ~1u, 0, (uint8_t) s->sub,
+                                                     (uint8_t) s->sub), false, true);
+                if (!step_answered(m)) {
+                        s->late_confirmed = true;
+                        break;
+                }
+                m->stats.late_answers++;
+                s->value[s->sub] &= ~1u;
+        }
+        PT_END(&s->confirm_pc);
+}
+
 static uint32_t known_prefix(const lss_fastscan_known *k, unsigned sub) {
         unsigned n = k->known_bits[sub];
         if (n == 0)
@@ -69,7 +175,7 @@ static uint32_t known_prefix(const lss_fastscan_known *k, unsigned sub) {
 
 int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         PT_BEGIN(&s->pc);
-        s->found = s->none = s->silent = false;
+        s->found = s->none = s->silent = s->heard = false;
         s->guessing = s->n_guess > 0;
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {
                 /* from this ping on: signs of other slaves from before say nothing */
@@ -94,6 +200,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                         s->none = s->silent = true;
                         break;
                 }
+                s->heard = true;
                 for (s->sub = 0; s->sub < LSS_FIELD_COUNT; s->sub++) {
                         if (s->guessing && s->sub < s->n_guess && s->sub >= s->confirmed &&
                             s->known.known_bits[s->sub] == 0) {
@@ -113,6 +220,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 s->confirm_guessed = true;
                         }
                         for (s->field_try = 0;; s->field_try++) {
+                                s->check = CHECK_HELD;
                                 if (s->sub < s->confirmed) {
                                         /* confirmed in an earlier attempt: confirm directly */
                                 } else if (s->known.known_bits[s->sub] >= 32) {
@@ -132,6 +240,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                 if (!step_answered(m))
                                                         continue;
                                         }
+                                        s->silent_run = 0;
+                                        s->searches = 0;
                                         for (s->bit = 31 - s->known.known_bits[s->sub]; s->bit >= 0; s->bit--) {
                                                 s->early_after = s->after;
                                                 s->watch_next = s->after != AFTER_ANSWER;
@@ -167,6 +277,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                                 if (s->late_latency_us)
                                                                         step_sample(m, s->late_latency_us);
                                                                 s->value[s->sub] &= ~(1u << (s->bit + 1));
+                                                                s->silent_run = 0;
                                                                 s->bit++; /* this bit is asked again */
                                                                 continue;
                                                         }
@@ -177,6 +288,18 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                 if (!s->bit_answered) {
                                                         s->value[s->sub] |= 1u << s->bit;
                                                         s->after = AFTER_SILENT_BIT;
+                                                        s->silent_run++;
+                                                } else {
+                                                        s->silent_run = 0;
+                                                }
+                                                if (s->silent_run == LSS_FASTSCAN_CHECK_RUN && s->bit > 0 &&
+                                                    s->searches < LSS_FASTSCAN_SEARCHES) {
+                                                        s->check_pc = 0;
+                                                        PT_CALL(&s->pc, check_field_read(m, s));
+                                                        if (s->check == CHECK_FIXED)
+                                                                continue;
+                                                        if (s->check == CHECK_NOBODY)
+                                                                break;
                                                 }
                                                 if (m->cancelling)
                                                         goto out;
@@ -185,28 +308,17 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 }
                                 if (s->late_confirmed)
                                         break;
-                                /* a direct confirmation (the field known, or confirmed
-                                 * in an attempt before) asked again after a silent one */
-                                s->watch_next = s->after == AFTER_SILENT_CONFIRM;
-                                FASTSCAN_STEP(m, s,
-                                             lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
-                                                                 (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false, false);
-                                if (m->step.watch_early &&
-                                    (m->step.stale_answer || (step_answered(m) && m->step.early))) {
-                                        /* the confirmation before was answered late: the
-                                         * slaves moved on, this one may go unanswered */
-                                        m->stats.late_answers++;
-                                        if (m->step.early)
-                                                step_sample(m, late_latency(m, s));
-                                        s->late_confirmed = true;
-                                        break;
+                                if (s->check != CHECK_NOBODY) {
+                                        s->confirm_pc = 0;
+                                        PT_CALL(&s->pc, confirm_field(m, s));
+                                        if (s->late_confirmed || step_answered(m))
+                                                break;
+                                        m->stats.retries++;
                                 }
-                                if (step_answered(m))
-                                        break;
-                                /* Nobody matched, so the slaves still expect this
-                                 * field: scan it again without a new ping. */
-                                m->stats.retries++;
-                                s->after = AFTER_SILENT_CONFIRM;
+                                /* Nobody matched (the confirmation, or not even the
+                                 * first bit in the check's search), so the slaves still
+                                 * expect this field: scan it again without a new ping. */
+                                s->after = s->check == CHECK_NOBODY ? AFTER_ANSWER : AFTER_SILENT_CONFIRM;
                                 s->confirm_value = s->value[s->sub];
                                 s->confirm_guessed = false;
                                 s->lone_failed = s->lone_failed || s->lone;

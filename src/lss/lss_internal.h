@@ -25,6 +25,13 @@ enum { PT_WAITING = 0, PT_DONE = 1 };
 /* Frames the procedures hand out together when nothing waits for them:
  * an interface's transmit queue is short (10 frames by default) */
 #define LSS_FEW_TX 6
+/* Silent fastscan bit steps in a row after which a field read is checked:
+ * does anybody still match? (lss_fastscan.c) */
+#define LSS_FASTSCAN_CHECK_RUN 6u
+/* ... and searched for a bit read wrong at most this often a field read
+ * (a late answer of a stall may land after the search and read one more
+ * wrong); after that its confirmation decides, and the field is read again */
+#define LSS_FASTSCAN_SEARCHES 2u
 
 enum step_kind {
         STEP_LSS,    /* LSS request(s), answered by expect_cs or unconfirmed */
@@ -94,6 +101,7 @@ typedef struct lss_fastscan_state {
         int bit;
         bool found, none;          /* outcome: one slave in configuration / nobody there */
         bool silent;               /* none because nobody answered the ping: no slave is non-configured */
+        bool heard;                /* a ping of this fastscan was answered */
         uint32_t ping_late_us;     /* nonzero: the ping's late guard (lss_step.late_us) */
         bool ping_again;           /* the ping repeats one that waited the timeout in silence:
                                     * it waits as an answered step would (not first contact) */
@@ -110,6 +118,16 @@ typedef struct lss_fastscan_state {
         bool late_confirmed;       /* ... whose answer came early in the next step */
         bool late_before, bit_answered; /* the bit step just asked */
         uint32_t early_latency_us, late_latency_us; /* an early answer: as the next step's, as the one before's */
+        int confirm_pc;            /* confirm_field() */
+        int confirm_after;         /* `after` of the confirmation being asked */
+        unsigned silent_run;       /* silent bit steps in a row in this field read */
+        int check_pc;              /* check_field_read() */
+        enum { CHECK_HELD, CHECK_FIXED, CHECK_DOUBT, CHECK_NOBODY } check; /* its outcome: somebody
+                                    * matches; a bit read wrong found (s->bit, value); neither
+                                    * known; nobody takes part in the field (read it again) */
+        unsigned searches;         /* this field read's searches for a bit read wrong */
+        int match_lo, match_hi;    /* ... the prefix search: bits 31..lo match nobody, 31..hi somebody */
+        uint64_t search_strays;    /* stats.stray_answers when it started */
 } lss_fastscan_state;
 
 typedef struct lss_assign_state {
@@ -189,6 +207,7 @@ typedef struct lss_scan_state {
         lss_identity other_before;  /* the last slave that confirmed another identity than found */
         unsigned n_other;           /* how often that happened in this pass */
         unsigned looks;             /* silent fastscan pings in a row, each after a switch to waiting */
+        bool pinged;                /* a fastscan ping of this enumeration was answered */
         enum lss_confirm confirm;
         uint8_t node, temp, next_temp;
         bool node_lone;         /* `node` was inquired from one frame in the full guard */

@@ -166,7 +166,7 @@ uint32_t lss_timing_answer_guard(const lss_timing *t) {
  * unknown: slaves faster than twice that (no latency of their own to speak
  * of) have no early answers. On vcan the frame time is 0. */
 bool lss_timing_early(const lss_timing *t, uint32_t latency_us) {
-        if (t->n_samples < LSS_EARLY_MIN_SAMPLES)
+        if (t->n_samples < LSS_EARLY_FIRST_SAMPLES)
                 return false;
         int64_t frame = t->cfg.bitrate ? 111ll * 1000000 / t->cfg.bitrate : 0;
         int64_t slack = t->cfg.bitrate ? 24ll * 1000000 / t->cfg.bitrate : 0;

@@ -39,6 +39,11 @@
 #define LSS_PATIENCE_MAX_US 1000000u
 #define LSS_PATIENCE_FACTOR 4u
 #define LSS_EARLY_MIN_SAMPLES 8u
+/* ... but an answer far sooner than the first few is judged early already:
+ * a late answer taken for its own there read a bit of a pass's first
+ * fastscan wrong (a VM candump: 0.15 ms into the step, with 3 samples of
+ * 1.4-1.9 ms). Taken for early wrongly, an answer costs a step asked again. */
+#define LSS_EARLY_FIRST_SAMPLES 2u
 
 typedef struct lss_timing {
         lss_timing_config cfg;
@@ -53,7 +58,7 @@ void lss_timing_add_sample(lss_timing *t, uint32_t latency_us);
 uint32_t lss_timing_max(const lss_timing *t);
 uint32_t lss_timing_min(const lss_timing *t);
 /* Sooner than 3/4 of the fastest answer of the window (once it holds
- * LSS_EARLY_MIN_SAMPLES; both without the answer's frame time; the fastest
+ * LSS_EARLY_FIRST_SAMPLES; both without the answer's frame time; the fastest
  * but for the window's fastest eighth, which may be late answers taken
  * for a step's own): too soon to be a slave's answer to the request just
  * sent, as far as this bus has shown. */

@@ -582,7 +582,7 @@ END_TEST
 
 /* What counts as too soon to be a step's own answer (fastscan then asks the
  * silent step before it again): under 3/4 of the fastest answer of the
- * window, both without the answer's frame time; not before 8 samples, and
+ * window, both without the answer's frame time; not before 2 samples, and
  * never for slaves with no latency of their own beyond stuff bits. */
 START_TEST(early_answer_rule) {
         lss_timing_config c;
@@ -590,10 +590,13 @@ START_TEST(early_answer_rule) {
         c.bitrate = 0; /* vcan: no frame time */
         lss_timing t;
         lss_timing_init(&t, &c);
-        for (int i = 0; i < 7; i++)
-                lss_timing_add_sample(&t, 2000);
-        ck_assert(!lss_timing_early(&t, 100));
         lss_timing_add_sample(&t, 2000);
+        ck_assert(!lss_timing_early(&t, 100)); /* one answer cannot tell */
+        lss_timing_add_sample(&t, 1900);
+        ck_assert(lss_timing_early(&t, 1400)); /* two can (before: from 8 on) */
+        ck_assert(!lss_timing_early(&t, 1425));
+        for (int i = 0; i < 6; i++)
+                lss_timing_add_sample(&t, 2000);
         ck_assert(lss_timing_early(&t, 1400));
         ck_assert(!lss_timing_early(&t, 1500));
 
