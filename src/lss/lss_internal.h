@@ -139,7 +139,8 @@ typedef struct lss_assign_state {
                                  * Configure and Store answers are that slave's, their steps
                                  * end at the answer (docs/engine.md, rule 4) */
         bool first_look;        /* an AutoAssign's first look for a map entry: its selective
-                                 * switch is asked at most twice, the second look asks again */
+                                 * switch is asked at most twice while nothing is measured
+                                 * (the asks wait the timeout), the second look asks again */
         unsigned flags, attempt, field;
         bool selected;
         const bool *taken;      /* node-IDs known to be taken (128 entries), or NULL */

@@ -440,17 +440,19 @@ static void count_selections_of(void *ud, const lss_frame *f, uint64_t t) {
                 a->n++;
 }
 
-/* A mapped device that is not there: the first look asks for it twice, the
- * second look, patient, twice. Before, 4 times on each: 0.5 s of every
- * pass for each absent device at the default timing, 0.25 s now. */
-START_TEST(absent_device_asked_twice_on_second_look) {
+/* A mapped device that is not there: a first look whose asks wait the
+ * timeout (nothing measured yet) asks for it twice, the second look,
+ * patient, twice. Before, 4 times on each: 0.5 s of every pass for each
+ * absent device at the default timing, 0.25 s now. Asked after a device
+ * that answered, the first look's asks wait a few ms: it asks 4 times. */
+static void absent_device_asked(bool first, unsigned first_look) {
         membus *b = membus_new(125000);
         lss_slave_faults f = faults_latency(1000, 300);
         lss_identity here = { 0xEC, 0x1234, 0x00010002, 0x3000 }, absent = { 0xEC, 0x1234, 0x00010002, 0x3001 };
         membus_add_slave(b, &here, LSS_NODE_ID_UNCONFIGURED, &f);
         lss_map_entry map[2] = {
-                { .id = here, .revision_known = true, .node_id = 10 },
-                { .id = absent, .revision_known = true, .node_id = 11 },
+                { .id = first ? absent : here, .revision_known = true, .node_id = first ? 11 : 10 },
+                { .id = first ? here : absent, .revision_known = true, .node_id = first ? 10 : 11 },
         };
         serial_asked a = { absent.serial, 0 };
         membus_set_trace(b, count_selections_of, &a);
@@ -462,9 +464,14 @@ START_TEST(absent_device_asked_twice_on_second_look) {
         const lss_outcome *o = outcome_of(m, &absent);
         ck_assert_int_eq(o->kind, LSS_OUTCOME_MISSING);
         ck_assert_msg(strstr(o->message, "waits of 80 ms"), "%s", o->message);
-        ck_assert_uint_eq(a.n, 2 + 2);
+        ck_assert_uint_eq(a.n, first_look + 2);
         lss_master_free(m);
         membus_free(b);
+}
+
+START_TEST(absent_device_asked_twice_on_second_look) {
+        absent_device_asked(true, 2);
+        absent_device_asked(false, 4);
 }
 END_TEST
 
@@ -497,6 +504,34 @@ START_TEST(first_look_missed_twice_found_on_second) {
         const lss_outcome *o = outcome_of(m, &id);
         ck_assert_int_eq(o->kind, LSS_OUTCOME_ASSIGNED);
         ck_assert_msg(strstr(o->message, "second look"), "%s", o->message);
+        ck_assert_uint_eq(d.asked, 3);
+        ck_assert_uint_eq(d.slave->st.active_node_id, 10);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
+/* The same deaf device after one that answered: the first look's asks
+ * wait a few ms, and it asks up to 4 times: found on the third ask, not
+ * by fastscan or the second look. Before, asked twice, it was left to
+ * them: under 4 buses at once in the VM a device whose two answers a
+ * stall held was found by fastscan, 0.35 s of a map pass of 32. */
+START_TEST(first_look_asks_again_after_answers_came) {
+        membus *b = membus_new(125000);
+        lss_slave_faults f = faults_latency(1000, 300);
+        lss_identity first = { 0xEC, 0x1234, 0x00010002, 0x3001 }, id = { 0xEC, 0x1234, 0x00010002, 0x3002 };
+        membus_add_slave(b, &first, 4, &f);
+        membus_add_slave(b, &id, 5, &f);
+        lss_map_entry map[2] = { { .id = first, .revision_known = true, .node_id = 9 },
+                                 { .id = id, .revision_known = true, .node_id = 10 } };
+        deaf_twice d = { membus_slave(b, 1), 0 };
+        membus_set_trace(b, hears_third_selection, &d);
+        lss_autoassign_plan p = { .map = map, .n_map = 2, .store = true };
+        lss_master *m = master_default();
+        ck_assert_int_eq(run_pass(m, b, &p)->status, LSS_OK);
+        const lss_outcome *o = outcome_of(m, &id);
+        ck_assert_int_eq(o->kind, LSS_OUTCOME_ASSIGNED);
+        ck_assert_msg(!strstr(o->message, "second look"), "%s", o->message);
         ck_assert_uint_eq(d.asked, 3);
         ck_assert_uint_eq(d.slave->st.active_node_id, 10);
         lss_master_free(m);
@@ -827,6 +862,7 @@ int main(void) {
         tcase_add_test(tc, store_lost_is_stored_on_second_look);
         tcase_add_test(tc, absent_device_asked_twice_on_second_look);
         tcase_add_test(tc, first_look_missed_twice_found_on_second);
+        tcase_add_test(tc, first_look_asks_again_after_answers_came);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
