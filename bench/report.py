@@ -261,8 +261,8 @@ def main():
                     fmt_spread(med(runs, 'parallel_s')), ratio['median'],
                     '/'.join('%.2f' % t for t in r0['alone']['bus_s']),
                     '/'.join('%.2f' % t for t in p0['bus_s']), load, right))
-        print('# alone: AutoAssign on one bus after the other (fresh slaves), each call timed; at once: one call per '
-              'bus, sent together, timed to the last reply;')
+        print('# alone: AutoAssign on one bus after the other (fresh slaves), each call timed from its send to its reply '
+              'read; at once: one call per bus, sent one after the other, timed from the first send to the last reply;')
         print('# ratio = at once / slowest alone (target: about 1x); results: every slave of every bus at its node-ID '
               '(reply and state files)')
         print('# at once (rep 0): how busy the VM\'s CPUs were (all of them, /proc/stat), and the CPU seconds of lssd '
