@@ -24,6 +24,15 @@ void lss_slave_faults_canopennode(lss_slave_faults *f) {
         f->bit_timing_silent = true;
 }
 
+void lss_slave_faults_lely(lss_slave_faults *f) {
+        lss_slave_faults_default(f);
+        f->lely_lss = true;
+        /* without a bit-rate hook lely answers every Configure Bit Timing
+         * with error 1 and ignores Activate Bit Timing */
+        f->bit_index_unsupported = UINT32_MAX;
+        f->miss_activation = true;
+}
+
 void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8_t bit_index,
                     const lss_slave_faults *faults, uint64_t seed, lss_slave_emit_fn emit, void *userdata) {
         memset(s, 0, sizeof(*s));
@@ -176,13 +185,27 @@ static void reset_communication(lss_slave *s) {
         lss_slave_set_heartbeat(s, s->faults.heartbeat_ms);
 }
 
-/* Power-on and NMT Reset Node: everything comes back from storage. */
-static void reset_node(lss_slave *s) {
+/* Power-on: everything comes back from storage. */
+static void load_stored(lss_slave *s) {
         s->st.pending_node_id = s->st.stored_node_id;
         s->st.bit_index = s->st.pending_bit_index = s->st.stored_bit_index;
         s->switch_at_us = NO_DEADLINE;
         s->activate_at_us = s->silent_until_us = 0;
+}
+
+/* NMT Reset Node reloads the stored values too; lely's reloads its object
+ * dictionary but keeps the pending node-ID, which the reset of
+ * communication then makes active. */
+static void reset_node(lss_slave *s) {
+        if (!s->faults.lely_lss)
+                load_stored(s);
         reset_communication(s);
+}
+
+/* lely keeps a device without a node-ID in NMT initialisation (its boot-up
+ * state waits for one); a device with one is past it. */
+static bool lely_initialising(const lss_slave *s) {
+        return s->faults.lely_lss && s->st.active_node_id == LSS_NODE_ID_UNCONFIGURED;
 }
 
 static void enter_configuration(lss_slave *s) {
@@ -201,8 +224,9 @@ static void switch_global(lss_slave *s, uint8_t mode) {
         bool was_configuring = s->st.configuration;
         s->st.configuration = false;
         s->sel_step = 0;
-        /* a node that had no ID and just got one starts using it at once */
-        if (was_configuring && s->st.active_node_id == LSS_NODE_ID_UNCONFIGURED &&
+        /* a node that had no ID and just got one starts using it at once
+         * (lely's waits for an NMT reset) */
+        if (was_configuring && !s->faults.lely_lss && s->st.active_node_id == LSS_NODE_ID_UNCONFIGURED &&
             lss_node_id_valid(s->st.pending_node_id))
                 reset_communication(s);
 }
@@ -380,7 +404,7 @@ static void configuration_service(lss_slave *s, const lss_frame *f) {
                 answer_u32(s, cs, lss_identity_field(&s->id, cs - LSS_CS_INQUIRE_VENDOR));
                 break;
         case LSS_CS_INQUIRE_NODE_ID:
-                answer_cs(s, cs, s->st.active_node_id, 0);
+                answer_cs(s, cs, lely_initialising(s) ? s->st.pending_node_id : s->st.active_node_id, 0);
                 break;
         default:
                 break;
@@ -432,8 +456,19 @@ static void lss_request(lss_slave *s, const lss_frame *f) {
         }
 }
 
+/* Whether an NMT command for `node` is for this slave: node 0 is everyone;
+ * lely compares with its own node-ID even when that is 255. */
+static bool nmt_addressed(const lss_slave *s, uint8_t node) {
+        if (node == 0)
+                return true;
+        return node == s->st.active_node_id && (lss_node_id_valid(node) || s->faults.lely_lss);
+}
+
 static void nmt_command(lss_slave *s, uint8_t cs, uint8_t node) {
-        if (node != 0 && (node != s->st.active_node_id || !lss_node_id_valid(node)))
+        if (!nmt_addressed(s, node))
+                return;
+        /* lely's boot-up state, where a device without node-ID waits, obeys only the resets */
+        if (lely_initialising(s) && cs != NMT_CS_RESET_NODE && cs != NMT_CS_RESET_COMMUNICATION)
                 return;
         switch (cs) {
         case NMT_CS_START:
@@ -464,7 +499,8 @@ static void note_change(lss_slave *s, const lss_slave_state *before) {
 void lss_slave_power_on(lss_slave *s, uint64_t now_us) {
         lss_slave_state before = s->st;
         s->now_us = now_us;
-        reset_node(s);
+        load_stored(s);
+        reset_communication(s);
         note_change(s, &before);
 }
 

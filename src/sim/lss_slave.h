@@ -34,6 +34,13 @@ typedef struct lss_slave_faults {
          * request goes to its process step, which answers any Fastscan with
          * 0x4F and any Switch Selective serial with 0x44, matching or not */
         bool canopennode_lss;
+        /* lely-core's LSS slave and the NMT around it (src/co/lss.c, nmt.c,
+         * read at 620d1858eb8520dbc3dc5e1a7314565becd54199): a configured
+         * node-ID takes effect only at NMT Reset Communication or Reset Node
+         * (never at the switch to waiting), and Reset Node keeps the pending
+         * node-ID; Inquire Node-ID gives the pending one while the device has
+         * no active one (NMT initialising) */
+        bool lely_lss;
         /* worst case: answers every Fastscan request in every state, whatever
          * its node-ID or identity; a confirmation that goes back to the
          * vendor field (bitcheck 0, lssnext < lsssub) puts it in configuration */
@@ -73,6 +80,11 @@ void lss_slave_faults_default(lss_slave_faults *f);
  * canopennode, lssd --sim-slave ...:canopennode): no identify services,
  * Configure Bit Timing ignored, any Fastscan answered in configuration. */
 void lss_slave_faults_canopennode(lss_slave_faults *f);
+/* The defaults plus the ways of a device on lely-core's LSS slave with a
+ * store hook and no bit-rate hook (lss-sim --profile lely, lssd --sim-slave
+ * ...:lely): lely_lss, every Configure Bit Timing answered "not supported",
+ * Activate Bit Timing not acted on. */
+void lss_slave_faults_lely(lss_slave_faults *f);
 
 /* Persistent and volatile state; lss-sim writes it to the state files. */
 typedef struct lss_slave_state {
@@ -123,7 +135,7 @@ void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8
                     const lss_slave_faults *faults, uint64_t seed, lss_slave_emit_fn emit, void *userdata);
 /* Power cycle: stored values become active, boot-up is sent when configured.
  * NMT Reset Node does the same (it reloads the stored values, so a pending
- * node-ID that was not stored is lost). */
+ * node-ID that was not stored is lost), but on lely_lss, which keeps it. */
 void lss_slave_power_on(lss_slave *s, uint64_t now_us);
 /* Heartbeat producer time (1017h) in ms, 0 = off: the next heartbeat is
  * one period after the slave's current time (and after every boot-up). */

@@ -24,6 +24,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         fl.no_identify = data[0] & 16;
         fl.duplicate_answers = data[0] & 32;
         fl.miss_activation = data[0] & 64;
+        fl.lely_lss = data[0] & 128;
         fl.bit_index_unsupported = data[1];
         fl.jitter_us = data[2];
         lss_identity id = { 0xEC, 0x1234, 1, 0x1276 };

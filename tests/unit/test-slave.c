@@ -82,16 +82,37 @@ static unsigned configure_node_id(rig *r, uint8_t nid) {
         return ask(r, &f);
 }
 
+/* Configuration state, Configure Node-ID (accepted), waiting again. */
+static void give_pending(rig *r, uint8_t nid) {
+        global(r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(r, nid), 1);
+        expect_answer(r, 0x11, LSS_ERR_OK, 0);
+        global(r, LSS_MODE_WAITING);
+}
+
 static unsigned nmt(rig *r, enum nmt_cs cs, uint8_t node) {
         lss_frame f;
         nmt_encode(&f, cs, node);
         return ask(r, &f);
 }
 
+/* An NMT command that sends nothing; the NMT state it leaves. */
+static enum lss_slave_nmt nmt_quiet(rig *r, enum nmt_cs cs, uint8_t node) {
+        ck_assert_uint_eq(nmt(r, cs, node), 0);
+        return r->s.st.nmt;
+}
+
 static unsigned inquire(rig *r, unsigned field) {
         lss_frame f;
         lss_encode_inquire(&f, field);
         return ask(r, &f);
+}
+
+/* Inquire Node-ID, which must be answered: the node-ID answered. */
+static uint8_t inquire_node_id(rig *r) {
+        ck_assert_uint_eq(inquire(r, LSS_FIELD_COUNT), 1);
+        expect_answer(r, 0x5E, last(r)->data[1], 0);
+        return last(r)->data[1];
 }
 
 static unsigned store(rig *r) {
@@ -297,17 +318,12 @@ END_TEST
 START_TEST(nmt_states) {
         rig r;
         rig_init(&r, 0x22, NULL);
-        ck_assert_uint_eq(nmt(&r, NMT_CS_START, 0x22), 0);
-        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_OPERATIONAL);
-        ck_assert_uint_eq(nmt(&r, NMT_CS_STOP, 0), 0);
-        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_STOPPED);
-        ck_assert_uint_eq(nmt(&r, NMT_CS_PRE_OPERATIONAL, 0x22), 0);
-        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
-        ck_assert_uint_eq(nmt(&r, NMT_CS_START, 0x21), 0);
-        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+        ck_assert_int_eq(nmt_quiet(&r, NMT_CS_START, 0x22), SLAVE_NMT_OPERATIONAL);
+        ck_assert_int_eq(nmt_quiet(&r, NMT_CS_STOP, 0), SLAVE_NMT_STOPPED);
+        ck_assert_int_eq(nmt_quiet(&r, NMT_CS_PRE_OPERATIONAL, 0x22), SLAVE_NMT_PRE_OPERATIONAL);
+        ck_assert_int_eq(nmt_quiet(&r, NMT_CS_START, 0x21), SLAVE_NMT_PRE_OPERATIONAL);
         /* unknown command */
-        ck_assert_uint_eq(nmt(&r, (enum nmt_cs) 0x33, 0), 0);
-        ck_assert_int_eq(r.s.st.nmt, SLAVE_NMT_PRE_OPERATIONAL);
+        ck_assert_int_eq(nmt_quiet(&r, (enum nmt_cs) 0x33, 0), SLAVE_NMT_PRE_OPERATIONAL);
         /* NMT frame with a bad DLC is not NMT */
         lss_frame f;
         nmt_encode(&f, NMT_CS_STOP, 0);
@@ -1294,6 +1310,165 @@ START_TEST(no_emit_callback) {
 }
 END_TEST
 
+/* ---- lely-core's LSS slave (lss_slave_faults_lely) ---- */
+
+static void rig_init_lely(rig *r, uint8_t node_id, void (*tweak)(lss_slave_faults *)) {
+        lss_slave_faults f;
+        lss_slave_faults_lely(&f);
+        if (tweak)
+                tweak(&f);
+        rig_init(r, node_id, &f);
+}
+
+/* A configured node-ID waits for an NMT reset, also on a device that had
+ * none: the switch to waiting brings no boot-up. */
+START_TEST(lely_no_bootup_at_waiting) {
+        rig r;
+        rig_init_lely(&r, 0xFF, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x44), 1);
+        expect_answer(&r, 0x11, LSS_ERR_OK, 0);
+        r.n = 0;
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(r.n, 0);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0xFF);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0x44);
+        /* the pending node-ID is no address yet */
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0x44), 0);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 1);
+        expect_bootup(&r, 0x44);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x44);
+}
+END_TEST
+
+/* Reset Node reloads the object dictionary, not the pending node-ID kept
+ * beside it; power-on takes the stored one. */
+START_TEST(lely_reset_node_keeps_pending) {
+        rig r;
+        rig_init_lely(&r, 0x22, NULL);
+        give_pending(&r, 0x30);
+        r.n = 0;
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_NODE, 0x22), 1);
+        expect_bootup(&r, 0x30);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x30);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0x30);
+        ck_assert_uint_eq(r.s.st.stored_node_id, 0x22);
+        lss_slave_power_on(&r.s, r.now);
+        expect_bootup(&r, 0x22);
+        ck_assert_uint_eq(r.s.st.pending_node_id, 0x22);
+
+        /* one without a node-ID hears the broadcast */
+        rig_init_lely(&r, 0xFF, NULL);
+        give_pending(&r, 0x45);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_NODE, 0), 1);
+        expect_bootup(&r, 0x45);
+}
+END_TEST
+
+/* Inquire Node-ID: the pending node-ID while NMT initialises (the device
+ * has no active one), else the active one. */
+START_TEST(lely_inquire_pending_while_initialising) {
+        rig r;
+        rig_init_lely(&r, 0xFF, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(inquire_node_id(&r), 0xFF);
+        ck_assert_uint_eq(configure_node_id(&r, 0x44), 1);
+        ck_assert_uint_eq(inquire_node_id(&r), 0x44);
+
+        rig_init_lely(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x30), 1);
+        ck_assert_uint_eq(inquire_node_id(&r), 0x22);
+        /* unconfigured by a reset: initialising again, the pending one counts */
+        ck_assert_uint_eq(configure_node_id(&r, 0xFF), 1);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 0);
+        ck_assert_uint_eq(r.s.st.active_node_id, 0xFF);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x12), 1);
+        ck_assert_uint_eq(inquire_node_id(&r), 0x12);
+}
+END_TEST
+
+/* lely's NMT obeys a command for node 0 or its own node-ID, 255 on a device
+ * without one; such a device stays in its boot-up state, which obeys only
+ * the resets. */
+START_TEST(lely_nmt_without_node_id) {
+        rig r;
+        rig_init_lely(&r, 0xFF, NULL);
+        ck_assert_int_eq(nmt_quiet(&r, NMT_CS_STOP, 0), SLAVE_NMT_PRE_OPERATIONAL);
+        ck_assert_int_eq(nmt_quiet(&r, NMT_CS_START, 0), SLAVE_NMT_PRE_OPERATIONAL);
+        give_pending(&r, 0x44);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0xFF), 1);
+        expect_bootup(&r, 0x44);
+        ck_assert_int_eq(nmt_quiet(&r, NMT_CS_STOP, 0x44), SLAVE_NMT_STOPPED);
+        /* with a node-ID, 255 is someone else */
+        ck_assert_int_eq(nmt_quiet(&r, NMT_CS_RESET_COMMUNICATION, 0xFF), SLAVE_NMT_STOPPED);
+}
+END_TEST
+
+/* No bit-rate hook: Configure Bit Timing "not supported" for every table
+ * and index, Activate Bit Timing not acted on. */
+START_TEST(lely_bit_timing_unsupported) {
+        rig r;
+        rig_init_lely(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        for (uint8_t i = 0; i <= 9; i++) {
+                ck_assert_uint_eq(bit_timing(&r, 0, i), 1);
+                expect_answer(&r, 0x13, LSS_ERR_BIT_RATE_NOT_SUPPORTED, 0);
+        }
+        ck_assert_uint_eq(bit_timing(&r, 1, 2), 1);
+        expect_answer(&r, 0x13, LSS_ERR_BIT_RATE_NOT_SUPPORTED, 0);
+        ck_assert_uint_eq(r.s.st.pending_bit_index, 4);
+        ck_assert_uint_eq(activate(&r, 10), 0);
+        ck_assert_uint_eq(lss_slave_deadline(&r.s), UINT64_MAX);
+        ck_assert(lss_slave_on_bus(&r.s, 4, r.now + 5000));
+}
+END_TEST
+
+static void store_unsupported(lss_slave_faults *f) {
+        f->store_unsupported = true;
+}
+
+static void store_fails(lss_slave_faults *f) {
+        f->store_fails = true;
+}
+
+/* Configure Node-ID takes 1..127 and 255 into the pending node-ID; the
+ * store hook stores it (17 00), the store knobs still apply. */
+START_TEST(lely_configure_and_store) {
+        rig r;
+        rig_init_lely(&r, 0x22, NULL);
+        global(&r, LSS_MODE_CONFIGURATION);
+        static const uint8_t bad[] = { 0, 128, 0xFE };
+        for (unsigned i = 0; i < 3; i++) {
+                ck_assert_uint_eq(configure_node_id(&r, bad[i]), 1);
+                expect_answer(&r, 0x11, LSS_ERR_NODE_ID_OUT_OF_RANGE, 0);
+        }
+        static const uint8_t good[] = { 1, 127, 0xFF, 0x40 };
+        for (unsigned i = 0; i < 4; i++) {
+                ck_assert_uint_eq(configure_node_id(&r, good[i]), 1);
+                expect_answer(&r, 0x11, LSS_ERR_OK, 0);
+                ck_assert_uint_eq(r.s.st.pending_node_id, good[i]);
+        }
+        ck_assert_uint_eq(r.s.st.active_node_id, 0x22);
+        ck_assert_uint_eq(store(&r), 1);
+        expect_answer(&r, 0x17, LSS_ERR_OK, 0);
+        ck_assert_uint_eq(r.s.st.stored_node_id, 0x40);
+        ck_assert_uint_eq(r.s.st.stored_bit_index, 4);
+
+        rig_init_lely(&r, 0x22, store_unsupported);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(store(&r), 1);
+        expect_answer(&r, 0x17, LSS_ERR_STORE_NOT_SUPPORTED, 0);
+        rig_init_lely(&r, 0x22, store_fails);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(configure_node_id(&r, 0x40), 1);
+        ck_assert_uint_eq(store(&r), 1);
+        expect_answer(&r, 0x17, LSS_ERR_STORE_MEDIA, 0);
+        ck_assert_uint_eq(r.s.st.stored_node_id, 0x22);
+}
+END_TEST
+
 int main(void) {
         Suite *s = suite_create("slave");
         TCase *tc = tcase_create("core");
@@ -1340,6 +1515,14 @@ int main(void) {
         tcase_add_test(tc, sdo_silent_when_stopped);
         tcase_add_test(tc, heartbeat_producer);
         tcase_add_test(tc, fault_tx_loss);
+        suite_add_tcase(s, tc);
+        tc = tcase_create("lely");
+        tcase_add_test(tc, lely_no_bootup_at_waiting);
+        tcase_add_test(tc, lely_reset_node_keeps_pending);
+        tcase_add_test(tc, lely_inquire_pending_while_initialising);
+        tcase_add_test(tc, lely_nmt_without_node_id);
+        tcase_add_test(tc, lely_bit_timing_unsupported);
+        tcase_add_test(tc, lely_configure_and_store);
         suite_add_tcase(s, tc);
         SRunner *sr = srunner_create(s);
         srunner_run_all(sr, CK_NORMAL);
