@@ -101,10 +101,12 @@ const char *lssconf_bus_describe(const lssconf_bus *b, char *buf, size_t size) {
 
         snprintf(buf, size,
                  "%s: %" PRIu32 " bit/s, %zu mapped device%s, auto-assign %s, store %s, "
-                 "unknown devices: %s, nmt-stop %s, replace %s, bit-rate change %s, LSS timeout %" PRIu32 " ms (%s)",
+                 "unknown devices: %s, nmt-stop %s, replace %s, reset after pass %s, bit-rate change %s, "
+                 "LSS timeout %" PRIu32 " ms (%s)",
                  b->interface, b->bitrate, b->n_devices, b->n_devices == 1 ? "" : "s",
                  b->auto_assign ? "on" : "off", b->store ? "on" : "off", unknown,
-                 b->nmt_stop ? "on" : "off", b->replace ? "on" : "off", b->bitrate_change ? "allowed" : "off",
+                 b->nmt_stop ? "on" : "off", b->replace ? "on" : "off", b->reset_after_pass ? "on" : "off",
+                 b->bitrate_change ? "allowed" : "off",
                  b->lss_timeout_ms, lssconf_lss_timing_to_string(b->lss_timing));
         return buf;
 }

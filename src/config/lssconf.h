@@ -57,6 +57,8 @@ typedef struct lssconf_bus {
         bool store;                  /* Store Configuration after assigning */
         bool nmt_stop;               /* NMT Stop all before LSS */
         bool replace;                /* AutoAssign gives a missing device's node-ID to its replacement */
+        bool reset_after_pass;       /* AutoAssign resets the bus (broadcast NMT Reset Communication)
+                                      * when devices wait for a reset to take their node-ID */
         bool bitrate_change;         /* daemon may retune the host interface (CAP_NET_ADMIN) */
         lssconf_unknown_policy unknown;
         uint8_t pool_lo, pool_hi;    /* 1..127, lo <= hi; 0/0 when no pool given */

@@ -23,7 +23,7 @@ typedef struct loader {
 
 static const char *const root_keys[] = { "lss_timeout_ms", "lss_timing", "boot_ready_limit_s", "buses", NULL };
 static const char *const bus_keys[] = {
-        "interface", "bitrate", "auto_assign", "store", "unknown", "pool", "nmt_stop", "replace",
+        "interface", "bitrate", "auto_assign", "store", "unknown", "pool", "nmt_stop", "replace", "reset_after_pass",
         "lss_timeout_ms", "lss_timing", "vendor", "product", "bitrate_change", "devices", NULL
 };
 static const char *const device_keys[] = { "vendor", "product", "revision", "serial", "node_id", NULL };
@@ -442,6 +442,7 @@ static void parse_bus(loader *l, const config_setting_t *g, const lssconf *c,
         (void) get_bool(l, g, "store", &b->store);
         (void) get_bool(l, g, "nmt_stop", &b->nmt_stop);
         (void) get_bool(l, g, "replace", &b->replace);
+        (void) get_bool(l, g, "reset_after_pass", &b->reset_after_pass);
         (void) get_bool(l, g, "bitrate_change", &b->bitrate_change);
 
         s = config_setting_get_member(g, "pool");

@@ -14,7 +14,7 @@
 #include "ctl/ctl_table.h"
 
 static const char *const device_states[] = {
-        "assigned", "pool", "configured", "non-configured", "mismatch", "conflict", "missing",
+        "assigned", "pool", "pending-reset", "configured", "non-configured", "mismatch", "conflict", "missing",
 };
 #define N_DEVICE_STATES (sizeof(device_states) / sizeof(device_states[0]))
 
@@ -23,7 +23,7 @@ static const char *ctl_device_state_color(const char *state) {
                 return NULL;
         if (strcmp(state, "assigned") == 0 || strcmp(state, "pool") == 0)
                 return CTL_ANSI_GREEN;
-        if (strcmp(state, "non-configured") == 0)
+        if (strcmp(state, "non-configured") == 0 || strcmp(state, "pending-reset") == 0)
                 return CTL_ANSI_YELLOW;
         if (strcmp(state, "mismatch") == 0 || strcmp(state, "conflict") == 0)
                 return CTL_ANSI_RED;

@@ -7,9 +7,11 @@
 #include "daemon/lssd_path.h"
 
 const char *lssd_device_state(uint8_t node_id, uint8_t mapped_node_id, bool missing, bool conflict,
-                              bool assigned, bool pooled) {
+                              bool assigned, bool pooled, bool pending_reset) {
         if (missing)
                 return "missing";
+        if (pending_reset && node_id != LSS_NODE_ID_UNCONFIGURED)
+                return "pending-reset";
         if (node_id == LSS_NODE_ID_UNCONFIGURED)
                 return "non-configured";
         if (conflict)

@@ -39,6 +39,11 @@ struct lssd_device {
         bool assigned;          /* its node-ID came from this daemon (AssignNodeId) */
         bool pooled;            /* ... from the pool (AutoAssign, unknown = "pool") */
         bool blocked;           /* the last auto-assign pass found its mapped node-ID taken */
+        bool pending_reset;     /* holds node_id, which lssd gave it, for its next reset: it
+                                 * did not boot up with it (a slave such as Lely's) */
+        /* a node-ID lssd configured into it that nothing verified nor gave
+         * back: it may hold it, so no other device is given it; 0 none */
+        uint8_t kept_node_id;
         const char *state;      /* as published */
         uint64_t last_seen;     /* µs, CLOCK_REALTIME; 0 = never */
         uint8_t found_by;       /* LSSD_FOUND_*: in the last Scan that found it; 0 = no Scan did */
@@ -51,11 +56,12 @@ struct lssd_device {
  *   non-configured  node-ID 0xFF
  *   conflict        another present device on the bus has the same node-ID
  *   assigned        it has the node-ID the map (or an AssignNodeId call) gave
+ *   pending-reset   it holds the node-ID lssd gave it, in effect at its next reset
  *   mismatch        it is in the map with another node-ID
  *   pool            not in the map, it has a node-ID AutoAssign gave from the pool
  *   configured      it has a node-ID and is not in the map */
 const char *lssd_device_state(uint8_t node_id, uint8_t mapped_node_id, bool missing, bool conflict,
-                              bool assigned, bool pooled);
+                              bool assigned, bool pooled, bool pending_reset);
 
 int lssd_device_new(lssd_bus *bus, const char *ifname, const lss_identity *id, lssd_device **ret);
 lssd_device *lssd_device_free(lssd_device *d);

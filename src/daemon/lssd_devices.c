@@ -65,7 +65,19 @@ static const char *device_state(const lssd_devices *ds, const lssd_device *d) {
         /* not given its node-ID because another device answers to it: say so even while non-configured */
         if (d->blocked && !d->missing)
                 return "conflict";
-        return lssd_device_state(d->node_id, d->mapped_node_id, d->missing, conflict, d->assigned, d->pooled);
+        return lssd_device_state(d->node_id, d->mapped_node_id, d->missing, conflict, d->assigned, d->pooled,
+                                 d->pending_reset);
+}
+
+lssd_device *lssd_devices_holding(const lssd_devices *ds, uint8_t node_id, const lss_identity *except) {
+        if (!lss_node_id_valid(node_id))
+                return NULL;
+        /* missing or not, it keeps what it holds */
+        for (lssd_device *d = ds->head; d; d = d->next)
+                if ((d->kept_node_id == node_id || (d->pending_reset && d->node_id == node_id)) &&
+                    !(except && lss_identity_equal(&d->id, except)))
+                        return d;
+        return NULL;
 }
 
 int lssd_devices_get(lssd_devices *ds, const lss_identity *id, bool revision_known, uint8_t node_id,

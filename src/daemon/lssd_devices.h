@@ -49,6 +49,10 @@ void lssd_devices_set_config(lssd_devices *ds, const lssconf_bus *config);
 lssd_device *lssd_devices_find(const lssd_devices *ds, const lss_identity *id);
 /* A present device other than `except` answering to node_id, NULL if none. */
 lssd_device *lssd_devices_with_node_id(const lssd_devices *ds, uint8_t node_id, const lss_identity *except);
+/* A device other than `except` that holds node_id without answering to it
+ * (yet): for its next reset (pending_reset), or maybe (kept_node_id). Such a
+ * node-ID is never given to another device. NULL if none. */
+lssd_device *lssd_devices_holding(const lssd_devices *ds, uint8_t node_id, const lss_identity *except);
 /* The device with this identity, created (with node_id) and announced if
  * new: 1 when new, 0 when known. A new one made with !revision_known (from
  * a map entry without revision, never seen) publishes RevisionKnown false. */

@@ -97,6 +97,7 @@ int lssd_job_set_plan(lssd_job *j, const lssconf_bus *c) {
                 .store = c->store,
                 .nmt_stop = c->nmt_stop,
                 .replace = c->replace,
+                .reset_after_pass = c->reset_after_pass,
         };
         return 0;
 }

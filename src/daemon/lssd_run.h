@@ -12,6 +12,10 @@
  * the job is over: its reply is sent and j->result says how it ended. */
 int lssd_job_run(lssd_job_env *e, lssd_job *j, const lss_result *r);
 
+/* What an assignment says of a device that holds its new node-ID but did not
+ * boot up with it (lss_result.pending_reset): the journal's and the reply's words. */
+#define LSSD_PENDING_RESET_TEXT "in effect after the device's next reset (it did not boot up with it)"
+
 /* The runner of each kind of job, as lssd_job_run(). */
 int lssd_run_reset(lssd_job_env *e, lssd_job *j, const lss_result *r);
 int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r);

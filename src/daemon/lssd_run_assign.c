@@ -25,6 +25,13 @@ int lssd_run_assign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
 
         if (r->status != LSS_OK) {
                 sd_bus_error err = SD_BUS_ERROR_NULL;
+                lssd_device *held = NULL;
+                if (r->may_hold && lssd_devices_get(e->devices, &j->identity, true, r->node_id, lssd_realtime_us(),
+                                                    &held) >= 0) {
+                        /* Configure Node-ID went out: it may hold the node-ID, nobody else gets it */
+                        held->kept_node_id = j->node_id;
+                        held->pending_reset = false;
+                }
                 if (r->in_use)
                         lssd_taken_error(e, &err, j->node_id, &j->identity, NULL);
                 else
@@ -51,6 +58,8 @@ int lssd_run_assign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 d->pooled = false;
                 d->blocked = false;
                 d->missing = false;
+                d->pending_reset = r->pending_reset;
+                d->kept_node_id = 0;
                 d->last_seen = lssd_realtime_us();
                 d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
                 lssd_devices_refresh(e->devices);
@@ -66,8 +75,9 @@ int lssd_run_assign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                          lss_store_error_name(r->err));
         else if (r->changed && j->assign.store)
                 snprintf(stored, sizeof(stored), ", stored");
-        lssd_log_device(LOG_NOTICE, e->ifname, &j->identity, j->node_id, "%s: device %s: node-ID %u -> %u%s%s",
-                        e->ifname, ident, r->node_id, j->node_id, r->changed ? "" : " (already set)", stored);
+        lssd_log_device(r->pending_reset ? LOG_WARNING : LOG_NOTICE, e->ifname, &j->identity, j->node_id,
+                        "%s: device %s: node-ID %u -> %u%s%s%s", e->ifname, ident, r->node_id, j->node_id,
+                        r->changed ? "" : " (already set)", stored, r->pending_reset ? ", " LSSD_PENDING_RESET_TEXT : "");
         j->result = "done";
         lssd_job_reply_empty(j);
         return 0;
@@ -128,6 +138,9 @@ int lssd_run_unassign(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                         lssd_heard_owner(e->heard, LSS_NODE_ID_UNCONFIGURED, &j->identity);
                         d->assigned = d->pooled = false;
                 }
+                /* 255 configured: whatever it held before is given up */
+                d->pending_reset = false;
+                d->kept_node_id = 0;
                 d->blocked = false;
                 d->missing = false;
                 d->last_seen = lssd_realtime_us();

@@ -75,6 +75,20 @@ static void autoassign_publish_one(lssd_job_env *e, const lssd_job *j, const lss
         }
         d->blocked = o->kind == LSS_OUTCOME_CONFLICT;
         d->missing = missing;
+        /* what it holds beyond what it answers to: only an assignment or its
+         * verification says it (a failure that kept nothing keeps what was) */
+        if (o->kind == LSS_OUTCOME_ASSIGNED || o->kind == LSS_OUTCOME_POOL || o->kind == LSS_OUTCOME_REPLACED ||
+            o->kind == LSS_OUTCOME_UNCHANGED) {
+                /* "unchanged" is what Inquire Node-ID says, which is the
+                 * pending node-ID of a device that has none in effect (Lely):
+                 * pending until it is heard there */
+                d->pending_reset = o->pending_reset || (o->kind == LSS_OUTCOME_UNCHANGED && d->pending_reset &&
+                                                        !lssd_heard_taken(e->heard, node_id, NULL));
+                d->kept_node_id = 0;
+        } else if (o->kind == LSS_OUTCOME_FAILED && o->kept_node_id) {
+                d->pending_reset = false;
+                d->kept_node_id = o->kept_node_id;
+        }
         if (!missing) {
                 d->last_seen = now_realtime;
                 d->changed |= LSSD_DEVICE_CHANGED_LAST_SEEN;
@@ -95,6 +109,9 @@ static void outcome_detail(const lss_outcome *o, char *buf, size_t size) {
         char old[40], stored[80] = "";
         if (o->not_stored)
                 snprintf(stored, sizeof(stored), "not stored (device cannot store: %s)", lss_store_error_name(o->err));
+        if (o->pending_reset)
+                snprintf(stored + strlen(stored), sizeof(stored) - strlen(stored), "%s%s", stored[0] ? ", " : "",
+                         LSSD_PENDING_RESET_TEXT);
         if (o->kind == LSS_OUTCOME_REPLACED)
                 snprintf(buf, size, "%s %s (missing)%s%s", o->dry ? "would replace" : "replaced",
                          identity_format(&o->replaced, o->replaced_revision_known, old, sizeof(old)),
@@ -126,7 +143,7 @@ static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_out
         case LSS_OUTCOME_ASSIGNED:
         case LSS_OUTCOME_POOL:
         case LSS_OUTCOME_REPLACED:
-                priority = LOG_NOTICE;
+                priority = o->pending_reset ? LOG_WARNING : LOG_NOTICE;
                 break;
         case LSS_OUTCOME_MISSING:
         case LSS_OUTCOME_CONFLICT:
@@ -137,7 +154,9 @@ static void autoassign_log_one(lssd_job_env *e, const lssd_job *j, const lss_out
                 break;
         }
         outcome_detail(o, detail, sizeof(detail));
-        const char *sep = !detail[0] ? "" : o->not_stored && o->kind != LSS_OUTCOME_REPLACED ? ", " : ": ";
+        const char *sep = !detail[0]                                                            ? ""
+                          : (o->not_stored || o->pending_reset) && o->kind != LSS_OUTCOME_REPLACED ? ", "
+                                                                                                   : ": ";
         const lss_map_entry *m = outcome_map_entry(j, o);
         if (o->kind == LSS_OUTCOME_MISSING) /* it has no node-ID here: the map's says which device */
                 lssd_log_device(priority, e->ifname, &o->id, o->new_node_id,

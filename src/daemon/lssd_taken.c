@@ -9,7 +9,7 @@
 
 static bool taken(void *userdata, uint8_t node_id, const lss_identity *id) {
         lssd_job_env *e = userdata;
-        return lssd_heard_taken(e->heard, node_id, id) ||
+        return lssd_heard_taken(e->heard, node_id, id) || lssd_devices_holding(e->devices, node_id, id) != NULL ||
                (e->taken_with_devices && lssd_devices_with_node_id(e->devices, node_id, id) != NULL);
 }
 
@@ -22,8 +22,12 @@ int lssd_taken_error(lssd_job_env *e, sd_bus_error *error, uint8_t node_id, cons
                      const char *prefix) {
         char who[160], ident[40], heard[80];
         lssd_device *d = lssd_devices_with_node_id(e->devices, node_id, except);
+        lssd_device *h = lssd_devices_holding(e->devices, node_id, except);
 
-        if (d)
+        if (h)
+                snprintf(who, sizeof(who), "device %s holds it %s", lssd_identity_format(&h->id, ident, sizeof(ident)),
+                         h->pending_reset ? "for its next reset" : "maybe (lssd configured it there, unverified)");
+        else if (d)
                 snprintf(who, sizeof(who), "device %s has it", lssd_identity_format(&d->id, ident, sizeof(ident)));
         else if (lssd_heard_taken(e->heard, node_id, except))
                 snprintf(who, sizeof(who), "a device lssd does not know %s as node %u",

@@ -9,7 +9,8 @@
 #include "daemon/lssd_job_env.h"
 
 /* The engine's check for the next job (lss_master_set_taken_check): what
- * was heard from a device other than the one to be given the node-ID, and,
+ * was heard from a device other than the one to be given the node-ID, what
+ * another device holds without answering to it (lssd_devices_holding), and,
  * `with_devices`, the node-IDs of the known devices other than it
  * (AssignNodeId, the raw Configure Node-ID). AutoAssign, which moves known
  * devices itself, goes by what was heard alone; both are read live. */

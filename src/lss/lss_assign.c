@@ -143,17 +143,24 @@ store:
         }
         step_start(m);
         PT_YIELD(&s->tail_pc);
-        if (!step_answered(m))
-                master_fail_at(m, LSS_E_VERIFY, LSS_SERVICE_VERIFY, LSS_REASON_NO_ANSWER,
-                               "no boot-up from node %u after the assignment", s->node_id);
-        else if (step_conflict(m))
+        if (!step_answered(m)) {
+                /* configured and stored, N is the device's now: what does it hold? */
+                s->vpc = 0;
+                PT_CALL(&s->tail_pc, proc_assign_unverified(m, s));
+        } else if (step_conflict(m))
                 master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_VERIFY, LSS_REASON_SEVERAL_ANSWERS,
                                "more than one device booted up as node %u (duplicate identity?)", s->node_id);
         goto out;
 dry:
         m->result.dry = true;
         SEND(m, &s->tail_pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
-out:;
+out:
+        /* Configure Node-ID went out (answered, or asked in vain): whatever
+         * failed after it, the device may hold the node-ID now */
+        if (m->result.status != LSS_OK && !m->result.given_back &&
+            ((m->result.changed && !m->result.dry) || (m->result.failed_service == LSS_SERVICE_CONFIGURE_NODE_ID &&
+                                                       m->result.reason == LSS_REASON_NO_ANSWER)))
+                m->result.may_hold = true;
         PT_END(&s->tail_pc);
 }
 
@@ -165,6 +172,7 @@ static void identity_of_scan(lss_assign_state *s) {
 /* Each assignment reports only on itself (a pass runs many). */
 static void result_reset(lss_master *m) {
         m->result.changed = m->result.in_use = m->result.not_stored = m->result.dry = false;
+        m->result.pending_reset = m->result.may_hold = m->result.given_back = false;
         m->result.err = m->result.spec = 0;
         m->result.failed_service = LSS_SERVICE_NONE;
         m->result.reason = LSS_REASON_NONE;

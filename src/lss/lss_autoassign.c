@@ -498,6 +498,10 @@ static int proc_autoassign(lss_master *m) {
                 s->deciding = false;
         }
         STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
+        if (s->plan->reset_after_pass && !s->plan->dry_run) {
+                s->r_pc = 0;
+                PT_CALL(&s->pc, aa_proc_reset_pending(m, s));
+        }
         m->result.status = LSS_OK;
         if (s->failed != LSS_OK)
                 master_fail(m, s->failed, "%s", s->failed_msg);

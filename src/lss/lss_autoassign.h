@@ -63,6 +63,12 @@ typedef struct lss_autoassign_plan {
          * and may not have stored; a device found with its mapped node-ID
          * among them is stored again (with store on) instead of "unchanged". */
         const bool *unstored;
+        /* Devices that did not boot up with the node-ID they were given but
+         * hold it for their next reset (lss_outcome.pending_reset): one
+         * broadcast NMT Reset Communication after the pass, then each is
+         * verified by its boot-up (or given its old node-ID back). Resets
+         * every device on the bus. */
+        bool reset_after_pass;
 } lss_autoassign_plan;
 
 enum lss_outcome_kind {
@@ -84,6 +90,12 @@ typedef struct lss_outcome {
         uint8_t new_node_id; /* what it has now (0 if missing) */
         enum lss_outcome_kind kind;
         bool not_stored;     /* assigned/pool, but the device cannot store (err: its Store Configuration error) */
+        bool pending_reset;  /* assigned/pool/replaced: the device holds new_node_id, in effect
+                              * at its next reset (it did not boot up with it) */
+        /* failed: a node-ID the device may hold (Configure Node-ID went out,
+         * nothing confirmed or gave it back): no other device is given it
+         * (lss_autoassign_plan.kept); 0 none */
+        uint8_t kept_node_id;
         bool dry;            /* assigned/pool/replaced: would be, in a dry run (nothing was sent) */
         /* replaced (and a replacement that failed): the missing map entry's
          * identity, its revision 0 when the map has none */

@@ -75,6 +75,8 @@ void aa_record(lss_master *m, lss_aa_state *s, const lss_identity *id, enum lss_
                 return;
         o->old_node_id = r->node_id;
         o->status = r->status;
+        o->pending_reset = false;
+        o->kept_node_id = 0;
         /* only a failure's message is this device's: one of an earlier
          * step of the pass (set aside as its own outcome) may still be there;
          * a success clears what a first look wrote here */
@@ -83,6 +85,7 @@ void aa_record(lss_master *m, lss_aa_state *s, const lss_identity *id, enum lss_
                 o->kind = !r->changed && given != LSS_OUTCOME_REPLACED ? LSS_OUTCOME_UNCHANGED : given;
                 o->new_node_id = s->target;
                 o->not_stored = r->not_stored;
+                o->pending_reset = r->pending_reset && r->changed;
                 o->err = r->err;
                 o->dry = r->dry && r->changed;
                 s->used[s->target] = true;
@@ -92,7 +95,8 @@ void aa_record(lss_master *m, lss_aa_state *s, const lss_identity *id, enum lss_
         } else {
                 o->kind = r->status == LSS_E_CONFLICT ? LSS_OUTCOME_CONFLICT : LSS_OUTCOME_FAILED;
                 o->new_node_id = r->node_id;
-                if (r->in_use)
+                o->kept_node_id = r->may_hold ? s->target : 0;
+                if (r->in_use || r->may_hold)
                         s->used[s->target] = true;
         }
         if (lss_node_id_valid(r->node_id))

@@ -44,6 +44,10 @@ typedef struct lss_aa_state {
         lss_enum_direct direct; /* the enumeration gives pool node-IDs as it finds (lss_autoassign.c) */
         enum lss_status failed; /* an enumeration met a slave that does not follow CiA 305 */
         char failed_msg[400];
+        /* reset_after_pass (lss_autoassign_reset.c) */
+        int r_pc;
+        size_t k;
+        uint64_t until;
         /* 1018h read by SDO (lss_autoassign_sdo.c) */
         int s_pc;
         bool sdo_read;          /* done in this pass (once at most) */
@@ -94,5 +98,9 @@ void aa_leave_alone(lss_aa_state *s, const lss_device *d, enum lss_outcome_kind 
                     const char *why);
 /* The map entries the second look asks for again (their count). */
 size_t aa_second_look_entries(lss_aa_state *s);
+/* reset_after_pass: the devices that hold their node-ID for their next
+ * reset are reset and verified, or given their old node-ID back (a child
+ * procedure, r_pc zeroed first; nothing to do without such devices). */
+int aa_proc_reset_pending(lss_master *m, lss_aa_state *s);
 /* Step 5: an outcome for each map entry the bus has not. */
 void aa_report_missing(const lss_master *m, lss_aa_state *s);

@@ -148,6 +148,8 @@ typedef struct lss_assign_state {
                                  * those are not probed again */
         const bool *unstored;   /* node-IDs that may not be stored (128 entries), or NULL */
         lss_fastscan_state fs;
+        int vpc, gpc;           /* proc_assign_unverified, proc_give_back */
+        uint8_t held;           /* the node-ID the slave answered Inquire Node-ID with there */
         uint64_t until;         /* unassign: the reset slave must answer 255 by then */
         uint8_t seen;           /* unassign: the node-ID it answered after the reset (0: none) */
 } lss_assign_state;
@@ -397,6 +399,15 @@ int proc_fastscan_assign(lss_master *m, lss_assign_state *s);
  * answered, failed_service: where it stopped). */
 int proc_assign_selected(lss_master *m, lss_assign_state *s);
 int proc_unassign(lss_master *m, lss_assign_state *s);
+/* assign_verify.c: the slave s->id took Configure Node-ID s->node_id (and
+ * Store) but did not boot up there: what it holds decides the result
+ * (pending_reset, given_back, may_hold); ends with every slave in waiting. */
+int proc_assign_unverified(lss_master *m, lss_assign_state *s);
+/* The selected slave s->id (alone in configuration) gets s->old back:
+ * Configure Node-ID, Store with LSS_ASSIGN_STORE, Inquire Node-ID = s->old
+ * (result.given_back), else result.may_hold; s->gpc zeroed first. Fails
+ * nothing itself: the caller says why it gave the node-ID back. */
+int proc_give_back(lss_master *m, lss_assign_state *s);
 int proc_enumerate(lss_master *m, lss_scan_state *s);
 /* probe.c: sets taken[id] or free[id] for every id of s->ids[0, n_ids) */
 int proc_probe(lss_master *m, lss_probe_state *s);

@@ -149,6 +149,14 @@ typedef struct lss_result {
         bool in_use;         /* assign: the node-ID already answers on the bus */
         bool not_stored;     /* assign: configured and verified, but the slave cannot store
                               * (Store Configuration error 1 or 2 in err): volatile until a power cycle */
+        /* assign, no boot-up at the new node-ID (docs/engine.md, "A node-ID
+         * configured is the device's"): */
+        bool pending_reset;  /* LSS_OK: the device answers Inquire Node-ID with it, and takes
+                              * it at its next reset (a slave such as Lely's) */
+        bool may_hold;       /* a failure after Configure Node-ID was answered: the device may
+                              * hold the new node-ID, which no other device may be given */
+        bool given_back;     /* a failure: the device was given its old node-ID back
+                              * (configured, stored when asked, read back) */
         bool stored;         /* unassign: Store Configuration of 255 answered with success */
         bool in_effect;      /* unassign: the slave was seen running non-configured (Inquire Node-ID 255) */
         lss_identity id;     /* fastscan, inquire identity */

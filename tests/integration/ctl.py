@@ -177,8 +177,9 @@ def test_status():
         scan_all(env)
         b = ctl.ok('--json', 'status').json['buses'][0]  # options before the command work too
         expect_eq(b['devices'], 4, 'device count')
-        expect_eq(b['device_states'], {'assigned': 2, 'pool': 0, 'configured': 0, 'non-configured': 2, 'mismatch': 0,
-                                       'conflict': 0, 'missing': 0}, 'device states')
+        expect_eq(b['device_states'], {'assigned': 2, 'pool': 0, 'pending-reset': 0, 'configured': 0,
+                                       'non-configured': 2, 'mismatch': 0, 'conflict': 0, 'missing': 0},
+                  'device states')
         # the default command is status; text for people, no colours off a terminal
         text = ctl.ok().out
         expect_eq(text, ctl.ok('status').out, 'lssctl == lssctl status')

@@ -23,6 +23,14 @@ static inline const lss_outcome *expect_outcome(lss_master *m, const lss_identit
         return o;
 }
 
+/* An AutoAssign pass to its end, then 100 ms of the bus (boot-ups, resets). */
+static inline const lss_result *run_pass(lss_master *m, membus *b, const lss_autoassign_plan *p) {
+        ck_assert_int_eq(lss_master_autoassign(m, p, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        lss_drive_idle(b, 100000);
+        return r;
+}
+
 /* The end of a test's pass: the master and its bus freed. */
 static inline void pass_free(lss_master *m, membus *b) {
         lss_master_free(m);

@@ -344,25 +344,6 @@ START_TEST(configure_node_id_checked) {
 }
 END_TEST
 
-/* The boot-up does not come within the wait: not verified, and said so. */
-START_TEST(assign_not_verified) {
-        lss_slave_faults f = faults_latency(5000, 0);
-        membus *b = membus_new(125000);
-        membus_add_slave(b, &ID1, 0xFF, &f);
-        lss_timing_config c;
-        lss_timing_config_default(&c);
-        c.bootup_timeout_us = 2000; /* the slave needs 5 ms to boot */
-        lss_master *m = lss_master_new(&c);
-        ck_assert_int_eq(lss_master_assign(m, &ID1, 8, LSS_ASSIGN_VERIFY, membus_now(b)), 0);
-        const lss_result *r = run(m, b);
-        ck_assert_int_eq(r->status, LSS_E_VERIFY);
-        ck_assert_ptr_nonnull(strstr(r->message, "no boot-up from node 8"));
-        ck_assert(all_waiting(b));
-        lss_master_free(m);
-        membus_free(b);
-}
-END_TEST
-
 static void fastscan_assign_all(size_t n, uint64_t seed, bool known, unsigned every_late) {
         lss_slave_faults f = faults_latency(1000, 300);
         membus *b = bus_random(n, seed, known ? 0xEC : 0, known ? 0x1234 : 0, &f);
@@ -699,7 +680,6 @@ int main(void) {
         tcase_add_test(tc, assign_duplicate_identity);
         tcase_add_test(tc, assign_refuses_taken_node_id);
         tcase_add_test(tc, configure_node_id_checked);
-        tcase_add_test(tc, assign_not_verified);
         tcase_add_test(tc, fastscan_assign_8);
         tcase_add_test(tc, fastscan_assign_32);
         tcase_add_test(tc, fastscan_assign_early_config);

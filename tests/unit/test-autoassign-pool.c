@@ -30,13 +30,6 @@ static void trace_pool(void *ud, const lss_frame *f, uint64_t t) {
         }
 }
 
-static const lss_result *run_pass(lss_master *m, membus *b, const lss_autoassign_plan *p) {
-        ck_assert_int_eq(lss_master_autoassign(m, p, membus_now(b)), 0);
-        const lss_result *r = run(m, b);
-        lss_drive_idle(b, 100000);
-        return r;
-}
-
 /* Every slave at a node-ID of the pool of its own, the one its outcome says. */
 static void expect_pooled(lss_master *m, membus *b, size_t from, size_t n) {
         bool given[128] = { false };

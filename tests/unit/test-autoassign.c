@@ -19,13 +19,6 @@ static void count(void *ud, const lss_frame *f, uint64_t t) {
         c->sdo += f->id >= 0x601 && f->id <= 0x67F;
 }
 
-static const lss_result *run_pass(lss_master *m, membus *b, const lss_autoassign_plan *p) {
-        ck_assert_int_eq(lss_master_autoassign(m, p, membus_now(b)), 0);
-        const lss_result *r = run(m, b);
-        lss_drive_idle(b, 100000);
-        return r;
-}
-
 /* The encoder manual: several encoders shipped at node-ID 1, LSS only when
  * NMT Stopped, mapped by serial number (vendor/product from the bus). */
 START_TEST(encoders_at_node_1) {

@@ -1011,16 +1011,18 @@ START_TEST(describe) {
         char buf[LSSCONF_BUS_DESCRIBE_MAX];
         ck_assert_int_eq(load("lss_timing = \"fixed\";\n"
                               "buses = ( { interface = \"can0\"; bitrate = 250000; auto_assign = true; unknown = \"pool\";\n"
-                              "pool = [ 100, 110 ]; nmt_stop = true; replace = true; bitrate_change = true; lss_timeout_ms = 30;\n"
+                              "pool = [ 100, 110 ]; nmt_stop = true; replace = true; reset_after_pass = true;\n"
+                              "bitrate_change = true; lss_timeout_ms = 30;\n"
                               "vendor = 1; product = 2; devices = ( { serial = 10; node_id = 5; } ); },\n"
                               "{ interface = \"can1\"; store = false; devices = ( { vendor = 1; product = 2; serial = 10; node_id = 5; },\n"
                               "{ vendor = 1; product = 2; serial = 11; node_id = 6; } ); } );\n", &c, &d), 0);
         ck_assert_str_eq(lssconf_bus_describe(&c->buses[0], buf, sizeof(buf)),
                          "can0: 250000 bit/s, 1 mapped device, auto-assign on, store on, unknown devices: pool 100..110, "
-                         "nmt-stop on, replace on, bit-rate change allowed, LSS timeout 30 ms (fixed)");
+                         "nmt-stop on, replace on, reset after pass on, bit-rate change allowed, LSS timeout 30 ms (fixed)");
         ck_assert_str_eq(lssconf_bus_describe(&c->buses[1], buf, sizeof(buf)),
                          "can1: 125000 bit/s, 2 mapped devices, auto-assign off, store off, unknown devices: ignore, "
-                         "nmt-stop off, replace off, bit-rate change off, LSS timeout 20 ms (fixed)");
+                         "nmt-stop off, replace off, reset after pass off, bit-rate change off, LSS timeout 20 ms "
+                         "(fixed)");
         /* truncation is safe */
         char small[8];
         ck_assert_str_eq(lssconf_bus_describe(&c->buses[0], small, sizeof(small)), "can0: 2");

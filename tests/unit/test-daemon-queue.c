@@ -137,19 +137,23 @@ START_TEST(scan_bookkeeping) {
 END_TEST
 
 START_TEST(device_states) {
-        /* node_id, mapped, missing, conflict, assigned, pooled */
-        ck_assert_str_eq(lssd_device_state(5, 5, true, false, false, false), "missing");
-        ck_assert_str_eq(lssd_device_state(0xFF, 5, false, false, false, false), "non-configured");
-        ck_assert_str_eq(lssd_device_state(0xFF, 0, false, true, false, false), "non-configured");
-        ck_assert_str_eq(lssd_device_state(5, 0, false, true, false, false), "conflict");
-        ck_assert_str_eq(lssd_device_state(5, 5, false, true, true, false), "conflict");
-        ck_assert_str_eq(lssd_device_state(5, 5, false, false, false, false), "assigned");
-        ck_assert_str_eq(lssd_device_state(6, 5, false, false, false, false), "mismatch");
-        ck_assert_str_eq(lssd_device_state(6, 5, false, false, true, false), "mismatch");
-        ck_assert_str_eq(lssd_device_state(6, 0, false, false, false, false), "configured");
-        ck_assert_str_eq(lssd_device_state(6, 0, false, false, true, false), "assigned");
-        ck_assert_str_eq(lssd_device_state(6, 0, false, false, true, true), "pool");
-        ck_assert_str_eq(lssd_device_state(6, 0, false, true, true, true), "conflict");
+        /* node_id, mapped, missing, conflict, assigned, pooled, pending_reset */
+        ck_assert_str_eq(lssd_device_state(5, 5, true, false, false, false, false), "missing");
+        ck_assert_str_eq(lssd_device_state(0xFF, 5, false, false, false, false, false), "non-configured");
+        ck_assert_str_eq(lssd_device_state(0xFF, 0, false, true, false, false, false), "non-configured");
+        ck_assert_str_eq(lssd_device_state(5, 0, false, true, false, false, false), "conflict");
+        ck_assert_str_eq(lssd_device_state(5, 5, false, true, true, false, false), "conflict");
+        ck_assert_str_eq(lssd_device_state(5, 5, false, false, false, false, false), "assigned");
+        ck_assert_str_eq(lssd_device_state(6, 5, false, false, false, false, false), "mismatch");
+        ck_assert_str_eq(lssd_device_state(6, 5, false, false, true, false, false), "mismatch");
+        ck_assert_str_eq(lssd_device_state(6, 0, false, false, false, false, false), "configured");
+        ck_assert_str_eq(lssd_device_state(6, 0, false, false, true, false, false), "assigned");
+        ck_assert_str_eq(lssd_device_state(6, 0, false, false, true, true, false), "pool");
+        ck_assert_str_eq(lssd_device_state(6, 0, false, true, true, true, false), "conflict");
+        /* it holds the node-ID lssd gave it for its next reset: before all but missing */
+        ck_assert_str_eq(lssd_device_state(6, 6, false, true, true, false, true), "pending-reset");
+        ck_assert_str_eq(lssd_device_state(6, 0, false, false, true, true, true), "pending-reset");
+        ck_assert_str_eq(lssd_device_state(6, 6, true, false, true, false, true), "missing");
 }
 END_TEST
 
