@@ -57,12 +57,15 @@ static lss_master *traced_pass(membus *b, tally *c, const lss_autoassign_plan *p
  * map has no revision for A and B. */
 static const lss_identity A = { 0x31, 0x77, 0x00020003, 0xA1 };
 static const lss_identity B = { 0x31, 0x77, 0x00020004, 0xB2 };
-static const lss_identity P = { 0x9A, 3, 1, 19 };
+/* The identities of the static maps' entries as initializers too: C takes
+ * no const object in a static initializer (gcc does, clang does not). */
+#define P_ID { 0x9A, 3, 1, 19 }
+static const lss_identity P = P_ID;
 
 static const lss_map_entry map_no_revision[] = {
         { .id = { 0x31, 0x77, 0, 0xA1 }, .revision_known = false, .node_id = 5 },
         { .id = { 0x31, 0x77, 0, 0xB2 }, .revision_known = false, .node_id = 6 },
-        { .id = P, .revision_known = true, .node_id = 7 },
+        { .id = P_ID, .revision_known = true, .node_id = 7 },
 };
 
 static membus *bus_canopennode(uint8_t a_node_id, const lss_slave_faults *plain, const lss_slave_faults *co) {
@@ -184,15 +187,16 @@ END_TEST
  * node-ID already: nothing is sent to it (no Configure, Store or reset), in
  * a dry run as well, unless node-ID 12 may not be stored (an interrupted
  * pass): then it is stored. */
-static const lss_identity OLD = { 0x9A, 3, 1, 0xDEF };
-static const lss_identity OLD2 = { 0x9A, 3, 1, 0xDEE };
+#define OLD_ID { 0x9A, 3, 1, 0xDEF }
+#define OLD2_ID { 0x9A, 3, 1, 0xDEE }  /* in the map only */
+static const lss_identity OLD = OLD_ID;
 static const lss_identity NEW = { 0x9A, 3, 1, 0xABC };
 static const lss_identity NEW2 = { 0x9A, 3, 2, 0xABD };
 
 static const lss_map_entry map_replace[] = {
-        { .id = P, .revision_known = true, .node_id = 7 },
-        { .id = OLD, .revision_known = true, .node_id = 12 },
-        { .id = OLD2, .revision_known = true, .node_id = 13 },
+        { .id = P_ID, .revision_known = true, .node_id = 7 },
+        { .id = OLD_ID, .revision_known = true, .node_id = 12 },
+        { .id = OLD2_ID, .revision_known = true, .node_id = 13 },
 };
 
 static membus *bus_spare_at_12(void) {

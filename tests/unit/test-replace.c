@@ -175,19 +175,19 @@ END_TEST
 /* The bus of one broken device (OLD, mapped to 12) and its spare (NEW),
  * and `at_12` configured at 12 if not NULL, after a pass with the plan's
  * flags as given (map filled in here). */
-static const lss_map_entry one_missing_map[] = {
-        { .id = C, .revision_known = true, .node_id = 6 },
-        { .id = OLD, .revision_known = true, .node_id = 12 },
-};
-
 static lss_master *one_missing_pass(membus **b, tally *c, lss_autoassign_plan p, const lss_identity *at_12) {
+        /* the pass is done when traced_pass() returns: plan and map may end here */
+        const lss_map_entry map[] = {
+                { .id = C, .revision_known = true, .node_id = 6 },
+                { .id = OLD, .revision_known = true, .node_id = 12 },
+        };
         const lss_identity *on_bus[] = { &NEW };
         *b = bus_with(on_bus, 1);
         if (at_12) {
                 lss_slave_faults f = faults_latency(800, 400);
                 membus_add_slave(*b, at_12, 12, &f);
         }
-        p.map = one_missing_map;
+        p.map = map;
         p.n_map = 2;
         p.store = true;
         return traced_pass(*b, c, &p);
