@@ -105,7 +105,8 @@ typedef struct lss_slave {
         lss_identity id;
         lss_slave_faults faults;
         lss_slave_state st;
-        /* fastscan progress: next lsssub expected, or -1 when not scanning */
+        /* fastscan progress: next lsssub expected, or -1 when not scanning
+         * (lely_lss: the vendor on entering waiting, any lssnext after) */
         int fs_sub;
         /* identify-remote progress: which of 0x46..0x4B matched so far */
         unsigned ident_step;
