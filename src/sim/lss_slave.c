@@ -240,7 +240,17 @@ static void switch_global(lss_slave *s, uint8_t mode) {
                 reset_communication(s);
 }
 
+/* lely keeps one expected command specifier for the selective switch and
+ * identify remote slave: a frame of one breaks a sequence of the other. */
+static void lely_forget_identify(lss_slave *s) {
+        if (s->faults.lely_lss) {
+                s->ident_step = 0;
+                s->ident_match = false;
+        }
+}
+
 static void switch_selective(lss_slave *s, unsigned field, uint32_t value) {
+        lely_forget_identify(s);
         bool hit = value == lss_identity_field(&s->id, field);
         if (field == LSS_FIELD_VENDOR) {
                 s->sel_step = hit ? 1 : 0;
@@ -259,6 +269,8 @@ static void switch_selective(lss_slave *s, unsigned field, uint32_t value) {
 }
 
 static void identify_remote(lss_slave *s, unsigned step, uint32_t value) {
+        if (s->faults.lely_lss)
+                s->sel_step = 0; /* see lely_forget_identify() */
         if (step == 0) {
                 s->ident_step = 1;
                 s->ident_match = value == s->id.vendor;
@@ -433,6 +445,15 @@ static void configuration_service(lss_slave *s, const lss_frame *f) {
         }
 }
 
+/* Who answers Identify Non-Configured Remote Slave: a slave without a
+ * node-ID; lely's without a pending one either (and in NMT initialisation,
+ * where it is while it has no node-ID). */
+static bool non_configured(const lss_slave *s) {
+        if (s->st.active_node_id != LSS_NODE_ID_UNCONFIGURED)
+                return false;
+        return !s->faults.lely_lss || s->st.pending_node_id == LSS_NODE_ID_UNCONFIGURED;
+}
+
 static void lss_request(lss_slave *s, const lss_frame *f) {
         uint8_t cs = f->data[0];
 
@@ -465,7 +486,7 @@ static void lss_request(lss_slave *s, const lss_frame *f) {
                         identify_remote(s, cs - LSS_CS_IDENTIFY_VENDOR, lss_get_u32(f->data + 1));
                 break;
         case LSS_CS_IDENTIFY_NON_CONFIGURED:
-                if (!s->faults.no_identify && s->st.active_node_id == LSS_NODE_ID_UNCONFIGURED)
+                if (!s->faults.no_identify && non_configured(s))
                         answer_cs(s, LSS_CS_IDENTIFY_NON_CONFIGURED_SLAVE, 0, 0);
                 break;
         case LSS_CS_FASTSCAN:

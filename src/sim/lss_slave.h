@@ -39,7 +39,10 @@ typedef struct lss_slave_faults {
          * node-ID takes effect only at NMT Reset Communication or Reset Node
          * (never at the switch to waiting), and Reset Node keeps the pending
          * node-ID; Inquire Node-ID gives the pending one while the device has
-         * no active one (NMT initialising) */
+         * no active one (NMT initialising); Fastscan in waiting whatever the
+         * node-IDs, its position the vendor on entering waiting and lssnext
+         * after every answered step; Identify Non-Configured only while both
+         * node-IDs are 255; one progress for Switch Selective and Identify */
         bool lely_lss;
         /* worst case: answers every Fastscan request in every state, whatever
          * its node-ID or identity; a confirmation that goes back to the
