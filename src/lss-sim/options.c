@@ -173,6 +173,7 @@ static const struct {
         [SIM_KNOB_DUPLICATE_ANSWERS] = { "duplicate-answers", VAL_BOOL },
         [SIM_KNOB_CONFIGURE_ERROR_SPECIFIC] = { "configure-error-specific", VAL_BOOL },
         [SIM_KNOB_CANOPENNODE_LSS] = { "canopennode-lss", VAL_BOOL },
+        [SIM_KNOB_LELY_LSS] = { "lely-lss", VAL_BOOL },
         [SIM_KNOB_FASTSCAN_ANY] = { "fastscan-any", VAL_BOOL },
         [SIM_KNOB_LATENCY] = { "latency", VAL_MS },
         [SIM_KNOB_JITTER] = { "jitter", VAL_MS },
@@ -308,6 +309,7 @@ void sim_fault_apply(const sim_fault_spec *spec, lss_slave_faults *f) {
         case SIM_KNOB_NEEDS_NMT_STOPPED: f->needs_nmt_stopped = on; break;
         case SIM_KNOB_NO_IDENTIFY: f->no_identify = on; break;
         case SIM_KNOB_CANOPENNODE_LSS: f->canopennode_lss = on; break;
+        case SIM_KNOB_LELY_LSS: f->lely_lss = on; break;
         case SIM_KNOB_FASTSCAN_ANY: f->fastscan_any = on; break;
         case SIM_KNOB_BIT_TIMING_SILENT: f->bit_timing_silent = on; break;
         case SIM_KNOB_BIT_INDEX_UNSUPPORTED:
@@ -366,8 +368,8 @@ static void help(FILE *out) {
                 "  store-unsupported, store-fails, early-config=vendor|product|revision|none,\n"
                 "  needs-nmt-stopped, no-identify, bit-timing-silent,\n"
                 "  bit-index-unsupported=I[,I...]|none, miss-activation, duplicate-answers,\n"
-                "  configure-error-specific, canopennode-lss, fastscan-any, latency=MS,\n"
-                "  jitter=MS\n\n"
+                "  configure-error-specific, canopennode-lss, lely-lss, fastscan-any,\n"
+                "  latency=MS, jitter=MS\n\n"
                 "State files: DIR/<serial as 8 lower-case hex digits>.state (an upper-case\n"
                 "name is read too), key=value lines: vendor, product, revision, serial\n"
                 "(0x + 8 hex digits), active_node_id, pending_node_id, stored_node_id,\n"
@@ -483,10 +485,11 @@ int sim_options_parse(sim_options *o, int argc, char **argv, FILE *out, FILE *er
                         break;
                 case ARG_PROFILE:
                         o->profile = sim_profile_find(optarg);
-                        if (!o->profile)
-                                return fail(err, "--profile '%s': %s", optarg,
-                                            "unknown profile (servo-drive, encoder, transmitter, generic, canopennode, "
-                                            "canopennode-bitrate)");
+                        if (!o->profile) {
+                                char names[256];
+                                sim_profile_names(names, sizeof(names));
+                                return fail(err, "--profile '%s': unknown profile (%s)", optarg, names);
+                        }
                         break;
                 case ARG_STATE:
                         if (optarg[0] == '\0')

@@ -1,4 +1,5 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
+#include <stdio.h>
 #include <string.h>
 
 #include "lss-sim/profiles.h"
@@ -38,15 +39,22 @@ static const sim_profile profiles[] = {
                 .summary = "CANopenNode v4 device: no identify services, Configure Bit Timing ignored, "
                            "answers every Fastscan in configuration state",
                 .default_node_id = LSS_NODE_ID_UNCONFIGURED,
-                .canopennode = true,
+                .base = lss_slave_faults_canopennode,
         },
         {
                 .name = "canopennode-bitrate",
                 .summary = "CANopenNode v4 device with a bit-rate callback: as canopennode, but answers "
                            "Configure Bit Timing",
                 .default_node_id = LSS_NODE_ID_UNCONFIGURED,
-                .canopennode = true,
+                .base = lss_slave_faults_canopennode,
                 .bit_timing_answered = true,
+        },
+        {
+                .name = "lely",
+                .summary = "lely-core device with a store hook: answers Fastscan whatever its node-ID, takes a "
+                           "new node-ID only at NMT reset, Configure Bit Timing \"not supported\"",
+                .default_node_id = LSS_NODE_ID_UNCONFIGURED,
+                .base = lss_slave_faults_lely,
         },
 };
 
@@ -66,13 +74,25 @@ const sim_profile *sim_profile_find(const char *name) {
         return NULL;
 }
 
+void sim_profile_names(char *buf, size_t size) {
+        size_t used = 0;
+        buf[0] = '\0';
+        for (size_t i = 0; i < sizeof(profiles) / sizeof(profiles[0]) && used < size; i++) {
+                int n = snprintf(buf + used, size - used, "%s%s", i ? ", " : "", profiles[i].name);
+                if (n < 0)
+                        return;
+                used += (size_t) n;
+        }
+}
+
 void sim_profile_faults(const sim_profile *p, lss_slave_faults *f) {
-        if (p->canopennode)
-                lss_slave_faults_canopennode(f);
+        if (p->base)
+                p->base(f);
         else
                 lss_slave_faults_default(f);
         if (p->bit_timing_answered)
                 f->bit_timing_silent = false;
         f->needs_nmt_stopped = p->needs_nmt_stopped;
-        f->bit_index_unsupported = p->bit_index_unsupported;
+        /* added to the base's (lely's are all of them) */
+        f->bit_index_unsupported |= p->bit_index_unsupported;
 }

@@ -19,7 +19,9 @@ typedef struct sim_profile {
         uint8_t default_node_id;
         /* deviations from a plain CiA 305 slave */
         bool needs_nmt_stopped;
-        bool canopennode;          /* lss_slave_faults_canopennode() */
+        /* the model's faults the profile starts from (e.g.
+         * lss_slave_faults_canopennode); NULL: lss_slave_faults_default */
+        void (*base)(lss_slave_faults *f);
         bool bit_timing_answered;  /* ... but answers Configure Bit Timing (a bit-rate callback) */
         uint32_t bit_index_unsupported;
 } sim_profile;
@@ -28,5 +30,7 @@ const sim_profile *sim_profile_find(const char *name);
 const sim_profile *sim_profile_default(void);
 /* All profiles, default first. */
 const sim_profile *sim_profile_all(size_t *n);
-/* lss_slave_faults_default() plus the profile's deviations. */
+/* "servo-drive, encoder, ...": every profile's name, in buf (cut to size). */
+void sim_profile_names(char *buf, size_t size);
+/* The profile's base faults plus its deviations. */
 void sim_profile_faults(const sim_profile *p, lss_slave_faults *f);

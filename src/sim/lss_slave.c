@@ -33,6 +33,12 @@ void lss_slave_faults_lely(lss_slave_faults *f) {
         f->miss_activation = true;
 }
 
+/* Fastscan's position on entering waiting: none until a ping; lely's
+ * starts at the vendor. */
+static int fastscan_start(const lss_slave *s) {
+        return s->faults.lely_lss ? LSS_FIELD_VENDOR : -1;
+}
+
 void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8_t bit_index,
                     const lss_slave_faults *faults, uint64_t seed, lss_slave_emit_fn emit, void *userdata) {
         memset(s, 0, sizeof(*s));
@@ -45,7 +51,7 @@ void lss_slave_init(lss_slave *s, const lss_identity *id, uint8_t node_id, uint8
         s->st.bit_index = s->st.pending_bit_index = s->st.stored_bit_index = bit_index;
         s->st.configuration = false;
         s->st.nmt = SLAVE_NMT_PRE_OPERATIONAL;
-        s->fs_sub = -1;
+        s->fs_sub = fastscan_start(s);
         s->switch_at_us = NO_DEADLINE;
         s->rng = seed;
         s->emit = emit;
@@ -163,7 +169,7 @@ static void process_time(lss_slave *s) {
 }
 
 static void reset_protocol_progress(lss_slave *s) {
-        s->fs_sub = -1;
+        s->fs_sub = fastscan_start(s);
         s->ident_step = 0;
         s->ident_match = false;
         s->sel_step = 0;
@@ -224,6 +230,9 @@ static void switch_global(lss_slave *s, uint8_t mode) {
         bool was_configuring = s->st.configuration;
         s->st.configuration = false;
         s->sel_step = 0;
+        /* lely enters waiting anew, also from waiting */
+        if (s->faults.lely_lss)
+                reset_protocol_progress(s);
         /* a node that had no ID and just got one starts using it at once
          * (lely's waits for an NMT reset) */
         if (was_configuring && !s->faults.lely_lss && s->st.active_node_id == LSS_NODE_ID_UNCONFIGURED &&
@@ -231,7 +240,17 @@ static void switch_global(lss_slave *s, uint8_t mode) {
                 reset_communication(s);
 }
 
+/* lely keeps one expected command specifier for the selective switch and
+ * identify remote slave: a frame of one breaks a sequence of the other. */
+static void lely_forget_identify(lss_slave *s) {
+        if (s->faults.lely_lss) {
+                s->ident_step = 0;
+                s->ident_match = false;
+        }
+}
+
 static void switch_selective(lss_slave *s, unsigned field, uint32_t value) {
+        lely_forget_identify(s);
         bool hit = value == lss_identity_field(&s->id, field);
         if (field == LSS_FIELD_VENDOR) {
                 s->sel_step = hit ? 1 : 0;
@@ -250,6 +269,8 @@ static void switch_selective(lss_slave *s, unsigned field, uint32_t value) {
 }
 
 static void identify_remote(lss_slave *s, unsigned step, uint32_t value) {
+        if (s->faults.lely_lss)
+                s->sel_step = 0; /* see lely_forget_identify() */
         if (step == 0) {
                 s->ident_step = 1;
                 s->ident_match = value == s->id.vendor;
@@ -283,6 +304,17 @@ static bool early_config_after(const lss_slave *s, unsigned sub) {
         return s->faults.early_config != SLAVE_EARLY_NONE && sub == (unsigned) s->faults.early_config - 1;
 }
 
+/* Whether a slave in waiting takes part in Fastscan with the node-IDs it
+ * has: only without one (CANopenNode: without a pending one either);
+ * lely's whatever they are. */
+static bool fastscan_takes_part(const lss_slave *s) {
+        if (s->faults.lely_lss)
+                return true;
+        if (s->st.active_node_id != LSS_NODE_ID_UNCONFIGURED && !s->faults.fastscan_when_configured)
+                return false;
+        return !s->faults.canopennode_lss || s->st.pending_node_id == LSS_NODE_ID_UNCONFIGURED;
+}
+
 static void fastscan(lss_slave *s, const lss_frame *f) {
         uint32_t idnumber = lss_get_u32(f->data + 1);
         uint8_t bitcheck = f->data[5], sub = f->data[6], next = f->data[7];
@@ -298,19 +330,20 @@ static void fastscan(lss_slave *s, const lss_frame *f) {
                         answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
                 return;
         }
-        if (s->st.active_node_id != LSS_NODE_ID_UNCONFIGURED && !s->faults.fastscan_when_configured)
+        if (!fastscan_takes_part(s))
                 return;
-        if (s->faults.canopennode_lss && s->st.pending_node_id != LSS_NODE_ID_UNCONFIGURED)
+        if (bitcheck > FASTSCAN_MAX_BIT && bitcheck != LSS_FASTSCAN_PING)
                 return;
-        if ((bitcheck > FASTSCAN_MAX_BIT && bitcheck != LSS_FASTSCAN_PING) ||
-            sub >= LSS_FIELD_COUNT || next >= LSS_FIELD_COUNT)
+        /* lely answers a ping whatever its lsssub and lssnext, and follows
+         * any lssnext: one past the serial matches nothing until a ping */
+        if (!s->faults.lely_lss && (sub >= LSS_FIELD_COUNT || next >= LSS_FIELD_COUNT))
                 return;
         if (bitcheck == LSS_FASTSCAN_PING) {
                 s->fs_sub = LSS_FIELD_VENDOR;
                 answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
                 return;
         }
-        if (s->fs_sub != (int) sub)
+        if (s->fs_sub != (int) sub || sub >= LSS_FIELD_COUNT)
                 return;
         uint32_t mask = UINT32_MAX << bitcheck;
         if ((lss_identity_field(&s->id, sub) ^ idnumber) & mask)
@@ -326,7 +359,8 @@ static void fastscan(lss_slave *s, const lss_frame *f) {
             ++s->late_fs_seen == s->faults.late_fs_nth)
                 s->tx_ready_us = s->now_us + tx_delay(s) + s->faults.late_fs_us;
         answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
-        if (bitcheck != 0)
+        /* lely moves to lssnext at every step, not at the field's last only */
+        if (bitcheck != 0 && !s->faults.lely_lss)
                 return;
         s->fs_sub = next;
         if (found)
@@ -411,6 +445,15 @@ static void configuration_service(lss_slave *s, const lss_frame *f) {
         }
 }
 
+/* Who answers Identify Non-Configured Remote Slave: a slave without a
+ * node-ID; lely's without a pending one either (and in NMT initialisation,
+ * where it is while it has no node-ID). */
+static bool non_configured(const lss_slave *s) {
+        if (s->st.active_node_id != LSS_NODE_ID_UNCONFIGURED)
+                return false;
+        return !s->faults.lely_lss || s->st.pending_node_id == LSS_NODE_ID_UNCONFIGURED;
+}
+
 static void lss_request(lss_slave *s, const lss_frame *f) {
         uint8_t cs = f->data[0];
 
@@ -443,7 +486,7 @@ static void lss_request(lss_slave *s, const lss_frame *f) {
                         identify_remote(s, cs - LSS_CS_IDENTIFY_VENDOR, lss_get_u32(f->data + 1));
                 break;
         case LSS_CS_IDENTIFY_NON_CONFIGURED:
-                if (!s->faults.no_identify && s->st.active_node_id == LSS_NODE_ID_UNCONFIGURED)
+                if (!s->faults.no_identify && non_configured(s))
                         answer_cs(s, LSS_CS_IDENTIFY_NON_CONFIGURED_SLAVE, 0, 0);
                 break;
         case LSS_CS_FASTSCAN:

@@ -39,7 +39,10 @@ typedef struct lss_slave_faults {
          * node-ID takes effect only at NMT Reset Communication or Reset Node
          * (never at the switch to waiting), and Reset Node keeps the pending
          * node-ID; Inquire Node-ID gives the pending one while the device has
-         * no active one (NMT initialising) */
+         * no active one (NMT initialising); Fastscan in waiting whatever the
+         * node-IDs, its position the vendor on entering waiting and lssnext
+         * after every answered step; Identify Non-Configured only while both
+         * node-IDs are 255; one progress for Switch Selective and Identify */
         bool lely_lss;
         /* worst case: answers every Fastscan request in every state, whatever
          * its node-ID or identity; a confirmation that goes back to the
@@ -105,7 +108,8 @@ typedef struct lss_slave {
         lss_identity id;
         lss_slave_faults faults;
         lss_slave_state st;
-        /* fastscan progress: next lsssub expected, or -1 when not scanning */
+        /* fastscan progress: next lsssub expected, or -1 when not scanning
+         * (lely_lss: the vendor on entering waiting, any lssnext after) */
         int fs_sub;
         /* identify-remote progress: which of 0x46..0x4B matched so far */
         unsigned ident_step;

@@ -111,15 +111,29 @@ int simbus_new(uint32_t bitrate, simbus **ret) {
         return 0;
 }
 
+void simbus_profile_faults(simbus_profile profile, lss_slave_faults *f) {
+        switch (profile) {
+        case SIMBUS_CANOPENNODE:
+        case SIMBUS_CANOPENNODE_BITRATE:
+                lss_slave_faults_canopennode(f);
+                f->bit_timing_silent = profile == SIMBUS_CANOPENNODE;
+                break;
+        case SIMBUS_LELY:
+                lss_slave_faults_lely(f);
+                break;
+        case SIMBUS_NO_SELECTIVE_SWITCH:
+                lss_slave_faults_default(f);
+                f->ignore_cs = LSS_CS_SWITCH_SEL_VENDOR;
+                break;
+        default:
+                lss_slave_faults_default(f);
+                break;
+        }
+}
+
 int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id, simbus_profile profile) {
         lss_slave_faults faults;
-        if (profile == SIMBUS_CANOPENNODE || profile == SIMBUS_CANOPENNODE_BITRATE)
-                lss_slave_faults_canopennode(&faults);
-        else
-                lss_slave_faults_default(&faults);
-        faults.bit_timing_silent = profile == SIMBUS_CANOPENNODE;
-        if (profile == SIMBUS_NO_SELECTIVE_SWITCH)
-                faults.ignore_cs = LSS_CS_SWITCH_SEL_VENDOR;
+        simbus_profile_faults(profile, &faults);
         /* a little latency, as real slaves have */
         faults.latency_us = 500;
         catch_up(s);
@@ -156,6 +170,7 @@ static const char *const profile_names[] = {
         [SIMBUS_CANOPENNODE] = "canopennode",
         [SIMBUS_CANOPENNODE_BITRATE] = "canopennode-bitrate",
         [SIMBUS_NO_SELECTIVE_SWITCH] = "no-selective-switch",
+        [SIMBUS_LELY] = "lely",
 };
 
 static int parse_profile(const char *name, simbus_profile *ret) {

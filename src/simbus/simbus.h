@@ -11,6 +11,7 @@
 
 #include "can/transport.h"
 #include "lss/lss_proto.h"
+#include "sim/lss_slave.h"
 
 typedef struct simbus simbus;
 
@@ -25,7 +26,11 @@ typedef enum simbus_profile {
         /* "no-selective-switch": ignores Switch State Selective (lss-sim's
          * --fault ignore-cs=0x40): found by SDO only */
         SIMBUS_NO_SELECTIVE_SWITCH,
+        SIMBUS_LELY,                /* "lely": lss_slave_faults_lely() */
 } simbus_profile;
+
+/* The slave model's faults of a profile (without the latency simbus adds). */
+void simbus_profile_faults(simbus_profile profile, lss_slave_faults *f);
 
 /* node_id 1..127 or 0xFF. */
 int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id, simbus_profile profile);
@@ -35,6 +40,6 @@ void simbus_transport(simbus *s, lss_transport *ret);
 /* Parses "IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:PROFILE]]"
  * (numbers in C notation, NODEID absent = 0xFF, PROFILE one of
  * SIMBUS_PROFILES). -EINVAL if malformed. */
-#define SIMBUS_PROFILES "canopennode, canopennode-bitrate, no-selective-switch"
+#define SIMBUS_PROFILES "canopennode, canopennode-bitrate, no-selective-switch, lely"
 int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id,
                        simbus_profile *profile);

@@ -101,8 +101,8 @@ class Slave:
         self.vendor, self.product, self.revision, self.serial = vendor, product, revision, serial
         self.node_id = node_id
         self.faults = list(faults)
-        # an lss-sim profile: 'canopennode' or 'canopennode-bitrate' (lssd
-        # --simulate knows them too), or None for the lss-sim process's own
+        # an lss-sim profile: 'canopennode', 'canopennode-bitrate' or 'lely'
+        # (lssd --simulate knows them too), or None for the lss-sim process's own
         self.profile = profile
         # lssd --simulate's profile where lss-sim has faults instead (e.g.
         # 'no-selective-switch' for ignore-cs=0x40): lss-sim ignores it

@@ -235,6 +235,16 @@ START_TEST(sim_slave_spec) {
         ck_assert_int_eq(co, SIMBUS_CANOPENNODE_BITRATE);
         ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:9:no-selective-switch", ifname, &id, &node, &co), 0);
         ck_assert_int_eq(co, SIMBUS_NO_SELECTIVE_SWITCH);
+        /* a device on lely-core's LSS slave */
+        ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:lely", ifname, &id, &node, &co), 0);
+        ck_assert_int_eq(co, SIMBUS_LELY);
+        lss_slave_faults f;
+        simbus_profile_faults(SIMBUS_LELY, &f);
+        ck_assert(f.lely_lss && f.miss_activation && !f.canopennode_lss);
+        ck_assert_uint_eq(f.bit_index_unsupported, UINT32_MAX);
+        simbus_profile_faults(SIMBUS_CANOPENNODE, &f);
+        ck_assert(f.canopennode_lss && f.bit_timing_silent && !f.lely_lss);
+        ck_assert(strstr(SIMBUS_PROFILES, "lely"));
         ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:plain", ifname, &id, &node, &co), -EINVAL);
         ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:5:canopennode:x", ifname, &id, &node, &co), -EINVAL);
         ck_assert_int_eq(simbus_slave_parse("sim:1:2:3:4:0", ifname, &id, &node, &co), -EINVAL);

@@ -297,6 +297,7 @@ START_TEST(options_errors) {
         USAGE_ERROR("--latency 'x'", "vcan0", "--latency", "x");
         USAGE_ERROR("--jitter '1.0001'", "vcan0", "--jitter", "1.0001");
         USAGE_ERROR("--profile 'drive'", "vcan0", "--profile", "drive");
+        USAGE_ERROR("canopennode-bitrate, lely)", "vcan0", "--profile", "drive");
         USAGE_ERROR("--bitrate '123456'", "vcan0", "--bitrate", "123456");
         USAGE_ERROR("--fault 'bogus'", "vcan0", "--fault", "bogus");
         USAGE_ERROR("--fault 'ignore-cs'", "vcan0", "--fault", "ignore-cs");
@@ -322,6 +323,8 @@ START_TEST(options_help_version) {
         ck_assert_ptr_nonnull(strstr(msg, "--slave"));
         ck_assert_ptr_nonnull(strstr(msg, "canopennode"));
         ck_assert_ptr_nonnull(strstr(msg, "miss-activation"));
+        ck_assert_ptr_nonnull(strstr(msg, "  lely "));
+        ck_assert_ptr_nonnull(strstr(msg, "lely-lss"));
         ck_assert_ptr_nonnull(strstr(msg, ".state"));
         free(msg);
         sim_options_done(&o);
@@ -385,6 +388,10 @@ START_TEST(fault_knobs) {
         ck_assert(f.duplicate_answers);
         apply(&f, "configure-error-specific");
         ck_assert(f.configure_error_specific);
+        apply(&f, "lely-lss");
+        ck_assert(f.lely_lss);
+        apply(&f, "lely-lss=off");
+        ck_assert(!f.lely_lss);
         apply(&f, "latency=12.5");
         ck_assert_uint_eq(f.latency_us, 12500);
         apply(&f, "jitter=3");
@@ -405,7 +412,7 @@ START_TEST(profiles) {
         size_t n;
         const sim_profile *all = sim_profile_all(&n);
 
-        ck_assert_uint_eq(n, 6);
+        ck_assert_uint_eq(n, 7);
         ck_assert_ptr_eq(all, sim_profile_default());
         ck_assert_str_eq(sim_profile_default()->name, "servo-drive");
         ck_assert_ptr_null(sim_profile_find("nope"));
@@ -440,6 +447,13 @@ START_TEST(profiles) {
         p = sim_profile_find("canopennode-bitrate");
         sim_profile_faults(p, &f);
         ck_assert(f.no_identify && f.canopennode_lss && !f.bit_timing_silent);
+
+        /* lss_slave_faults_lely(): the profile's knobs do not undo its 13 01 */
+        p = sim_profile_find("lely");
+        ck_assert_uint_eq(p->default_node_id, 0xFF);
+        sim_profile_faults(p, &f);
+        ck_assert(f.lely_lss && f.miss_activation && !f.no_identify && !f.canopennode_lss);
+        ck_assert_uint_eq(f.bit_index_unsupported, UINT32_MAX);
 }
 END_TEST
 
@@ -781,6 +795,35 @@ START_TEST(profile_bit_timing) {
 }
 END_TEST
 
+/* lely: a configured slave answers Fastscan too; Identify Non-Configured
+ * only the other; Configure Bit Timing "not supported"; a new node-ID
+ * waits for an NMT reset, and Reset Node keeps it. */
+START_TEST(profile_lely) {
+        uint64_t t = 0;
+        sim *s = NEW_SIM(t, "vcan0", "--profile", "lely", "--slave", "1:2:3:4:5", "--slave", "1:2:3:6");
+        capture c = {};
+        run_until(s, 50000, &c);
+        ck_assert_uint_eq(c.n, 1);
+        ck_assert_str_eq(fmt(&c.f[0]), "705#00");
+        t = 100000;
+        EXCHANGE(s, &t, "7E5#5100000000800000", "7E4#4F00000000000000");
+        ck_assert_uint_eq(s->stats.merged_frames, 1);
+        EXCHANGE(s, &t, "7E5#4C00000000000000", "7E4#5000000000000000");
+        SILENCE(s, &t, "7E5#4001000000000000");
+        SILENCE(s, &t, "7E5#4102000000000000");
+        SILENCE(s, &t, "7E5#4203000000000000");
+        EXCHANGE(s, &t, "7E5#4304000000000000", "7E4#4400000000000000");
+        EXCHANGE(s, &t, "7E5#1300030000000000", "7E4#1301000000000000");
+        EXCHANGE(s, &t, "7E5#1107000000000000", "7E4#1100000000000000");
+        EXCHANGE(s, &t, "7E5#5E00000000000000", "7E4#5E05000000000000");
+        EXCHANGE(s, &t, "7E5#1700000000000000", "7E4#1700000000000000");
+        SILENCE(s, &t, "7E5#0400000000000000");
+        EXCHANGE(s, &t, "000#8105", "707#00");
+        ck_assert_uint_eq(s->slaves[0].s.st.stored_node_id, 7);
+        sim_free(s);
+}
+END_TEST
+
 /* Activate Bit Timing: the segment follows the slaves to the new rate. */
 START_TEST(bitrate_follow) {
         uint64_t t = 0;
@@ -960,6 +1003,7 @@ int main(void) {
         tcase_add_test(tc, encoder_needs_stopped);
         tcase_add_test(tc, heartbeat_and_nmt_state);
         tcase_add_test(tc, profile_bit_timing);
+        tcase_add_test(tc, profile_lely);
         tcase_add_test(tc, bitrate_follow);
         tcase_add_test(tc, state_restart);
         tcase_add_test(tc, print_slaves);

@@ -1469,6 +1469,146 @@ START_TEST(lely_configure_and_store) {
 }
 END_TEST
 
+/* Fastscan in waiting whatever the node-IDs: a configured device is found
+ * like one without a node-ID; in configuration Fastscan is ignored. */
+START_TEST(lely_fastscan_whatever_node_id) {
+        rig r;
+        rig_init_lely(&r, 0x22, NULL);
+        lss_identity found = { 0 };
+        scan(&r, &found);
+        ck_assert(lss_identity_equal(&found, &ID));
+        ck_assert(r.s.st.configuration);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 0);
+        ck_assert_uint_eq(configure_node_id(&r, 0x30), 1);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 0);
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+}
+END_TEST
+
+/* LSSPos is the vendor on entering waiting; a request is answered when it
+ * asks about LSSPos and the unmasked bits match, and moves LSSPos to
+ * lssnext whatever its bitcheck; the ping always answers and goes back to
+ * the vendor; bitcheck 0 with lssnext < lsssub enters configuration. */
+START_TEST(lely_fastscan_position) {
+        rig r;
+        rig_init_lely(&r, 0xFF, NULL);
+        /* no ping needed */
+        ck_assert_uint_eq(fastscan(&r, ID.vendor & 0x80000000u, 31, 0, 0), 1);
+        /* a bit step that names another lssnext moves on */
+        ck_assert_uint_eq(fastscan(&r, ID.vendor ^ 0x0F, 4, 0, 1), 1);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 1), 0);
+        ck_assert_uint_eq(fastscan(&r, ID.product ^ 0x10, 4, 1, 1), 0);
+        ck_assert_uint_eq(fastscan(&r, ID.product, 0, 1, 2), 1);
+        /* lssnext past the serial: answered, then nothing matches */
+        ck_assert_uint_eq(fastscan(&r, ID.revision, 0, 2, 4), 1);
+        ck_assert_uint_eq(fastscan(&r, ID.revision, 0, 2, 3), 0);
+        ck_assert_uint_eq(fastscan(&r, 0, 0, 4, 0), 0);
+        /* until a ping, whatever its lsssub and lssnext */
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 7, 9), 1);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 1), 1);
+        /* reserved bitchecks are ignored */
+        ck_assert_uint_eq(fastscan(&r, ID.product, 32, 1, 1), 0);
+        ck_assert_uint_eq(fastscan(&r, ID.product, 0x81, 1, 1), 0);
+        ck_assert(!r.s.st.configuration);
+        ck_assert_uint_eq(fastscan(&r, ID.product, 0, 1, 0), 1);
+        ck_assert(r.s.st.configuration);
+}
+END_TEST
+
+/* Entering waiting, also by 04 00 while waiting, starts Fastscan, the
+ * selective switch and identify remote slave over. */
+START_TEST(lely_waiting_resets_progress) {
+        rig r;
+        rig_init_lely(&r, 0xFF, NULL);
+        ck_assert_uint_eq(fastscan(&r, 0, LSS_FASTSCAN_PING, 0, 0), 1);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 1), 1);
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(fastscan(&r, ID.product, 0, 1, 2), 0);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 1), 1);
+
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_VENDOR, ID.vendor), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_PRODUCT, ID.product), 0);
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_REVISION, ID.revision), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_SERIAL, ID.serial), 0);
+        ck_assert(!r.s.st.configuration);
+
+        lss_frame f;
+        for (unsigned i = 0; i < 3; i++) {
+                lss_encode_identify_remote(&f, i, i == 0 ? ID.vendor : i == 1 ? ID.product : 0);
+                ck_assert_uint_eq(ask(&r, &f), 0);
+        }
+        global(&r, LSS_MODE_WAITING);
+        for (unsigned i = 3; i < 6; i++) {
+                lss_encode_identify_remote(&f, i, i == 4 ? 0 : UINT32_MAX);
+                ck_assert_uint_eq(ask(&r, &f), 0);
+        }
+
+        /* leaving configuration: the vendor again */
+        ck_assert_uint_eq(select_all(&r, &ID), 1);
+        global(&r, LSS_MODE_WAITING);
+        ck_assert_uint_eq(fastscan(&r, ID.vendor, 0, 0, 1), 1);
+}
+END_TEST
+
+/* Identify non-configured remote slave, in waiting and in configuration,
+ * only while the active and the pending node-ID are both 255 (NMT is
+ * initialising then: lely keeps a device without node-ID there). */
+START_TEST(lely_identify_non_configured) {
+        lss_frame f;
+        lss_encode_identify_non_configured(&f);
+        rig r;
+        rig_init_lely(&r, 0xFF, NULL);
+        ck_assert_uint_eq(ask(&r, &f), 1);
+        expect_answer(&r, 0x50, 0, 0);
+        global(&r, LSS_MODE_CONFIGURATION);
+        ck_assert_uint_eq(ask(&r, &f), 1);
+        ck_assert_uint_eq(configure_node_id(&r, 0x10), 1);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        ck_assert_uint_eq(configure_node_id(&r, 0xFF), 1);
+        ck_assert_uint_eq(ask(&r, &f), 1);
+
+        rig_init_lely(&r, 0x22, NULL);
+        give_pending(&r, 0xFF);
+        ck_assert_uint_eq(ask(&r, &f), 0);
+        ck_assert_uint_eq(nmt(&r, NMT_CS_RESET_COMMUNICATION, 0), 0);
+        ck_assert_uint_eq(ask(&r, &f), 1);
+}
+END_TEST
+
+static unsigned identify_step(rig *r, unsigned step, uint32_t v) {
+        lss_frame f;
+        lss_encode_identify_remote(&f, step, v);
+        return ask(r, &f);
+}
+
+/* One expected command specifier serves the selective switch and identify
+ * remote slave: a frame of one breaks a sequence of the other. */
+START_TEST(lely_selective_and_identify_share_progress) {
+        rig r;
+        rig_init_lely(&r, 0x22, NULL);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_VENDOR, ID.vendor), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_PRODUCT, ID.product), 0);
+        ck_assert_uint_eq(identify_step(&r, 0, ID.vendor), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_REVISION, ID.revision), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_SERIAL, ID.serial), 0);
+        ck_assert(!r.s.st.configuration);
+
+        const uint32_t v[6] = { ID.vendor, ID.product, 0, UINT32_MAX, 0, UINT32_MAX };
+        for (unsigned i = 0; i < 3; i++)
+                ck_assert_uint_eq(identify_step(&r, i, v[i]), 0);
+        ck_assert_uint_eq(selective(&r, LSS_FIELD_VENDOR, ID.vendor), 0);
+        for (unsigned i = 3; i < 6; i++)
+                ck_assert_uint_eq(identify_step(&r, i, v[i]), 0);
+
+        /* each on its own, identify in configuration too */
+        ck_assert_uint_eq(identify(&r, v[0], v[1], v[2], v[3], v[4], v[5]), 1);
+        ck_assert_uint_eq(select_all(&r, &ID), 1);
+        ck_assert_uint_eq(identify(&r, v[0], v[1], v[2], v[3], v[4], v[5]), 1);
+}
+END_TEST
+
 int main(void) {
         Suite *s = suite_create("slave");
         TCase *tc = tcase_create("core");
@@ -1523,6 +1663,11 @@ int main(void) {
         tcase_add_test(tc, lely_nmt_without_node_id);
         tcase_add_test(tc, lely_bit_timing_unsupported);
         tcase_add_test(tc, lely_configure_and_store);
+        tcase_add_test(tc, lely_fastscan_whatever_node_id);
+        tcase_add_test(tc, lely_fastscan_position);
+        tcase_add_test(tc, lely_waiting_resets_progress);
+        tcase_add_test(tc, lely_identify_non_configured);
+        tcase_add_test(tc, lely_selective_and_identify_share_progress);
         suite_add_tcase(s, tc);
         SRunner *sr = srunner_create(s);
         srunner_run_all(sr, CK_NORMAL);
