@@ -159,6 +159,7 @@ static void bus_poll_rx(lssd_bus *b) {
                 } else {
                         lssd_unstored_note(&b->env.unstored, &f, rx);
                         lssd_heard_rx(&b->heard, &f, lssd_realtime_us());
+                        lssd_devices_heard(&b->devices, &f);
                         lss_master_on_frame(b->engine, &f, rx);
                 }
         }

@@ -154,3 +154,17 @@ void lssd_devices_refresh(lssd_devices *ds) {
                         ds->ops->changed(ds->userdata, d, names);
         }
 }
+
+void lssd_devices_heard(lssd_devices *ds, const lss_frame *f) {
+        uint8_t node, state;
+        bool any = false;
+        if (!bootup_decode(f, &node, &state) || state != 0)
+                return;
+        for (lssd_device *d = ds->head; d; d = d->next)
+                if (d->pending_reset && d->node_id == node) {
+                        d->pending_reset = false;
+                        any = true;
+                }
+        if (any)
+                lssd_devices_refresh(ds);
+}

@@ -61,6 +61,9 @@ int lssd_devices_get(lssd_devices *ds, const lss_identity *id, bool revision_kno
 /* Recomputes mapped node-IDs and states of every device and publishes what
  * changed. */
 void lssd_devices_refresh(lssd_devices *ds);
+/* A frame from the bus: the boot-up of a device that held its node-ID for
+ * its next reset (pending_reset) says the node-ID is in effect now. */
+void lssd_devices_heard(lssd_devices *ds, const lss_frame *f);
 
 /* CLOCK_REALTIME µs, for LastSeen. */
 static inline uint64_t lssd_realtime_us(void) {

@@ -225,10 +225,53 @@ START_TEST(remove_and_refuse) {
 }
 END_TEST
 
+/* A node-ID a device holds without answering to it (for its next reset,
+ * or maybe: configured, unverified) is nobody else's, missing or not; its
+ * boot-up there ends "pending-reset". */
+START_TEST(held_node_ids) {
+        lssd_devices ds;
+        lssconf_bus c;
+        recorder r;
+        lssd_device *a = NULL, *b = NULL;
+        setup(&ds, &r, &c);
+        ck_assert_int_eq(lssd_devices_get(&ds, &A, true, 5, 42, &a), 1);
+        ck_assert_int_eq(lssd_devices_get(&ds, &B, true, LSS_NODE_ID_UNCONFIGURED, 42, &b), 1);
+        ck_assert_ptr_null(lssd_devices_holding(&ds, 5, &B));
+
+        a->pending_reset = true;
+        lssd_devices_refresh(&ds);
+        ck_assert_str_eq(a->state, "pending-reset");
+        ck_assert_ptr_eq(lssd_devices_holding(&ds, 5, &B), a);
+        ck_assert_ptr_eq(lssd_devices_holding(&ds, 5, NULL), a);
+        ck_assert_ptr_null(lssd_devices_holding(&ds, 5, &A));
+
+        b->kept_node_id = 30;
+        b->missing = true;
+        ck_assert_ptr_eq(lssd_devices_holding(&ds, 30, &A), b);
+        ck_assert_ptr_null(lssd_devices_holding(&ds, 31, &A));
+        lssd_devices_refresh(&ds);
+
+        /* a boot-up elsewhere changes nothing; at 5 it is in effect */
+        r.log[0] = 0;
+        lss_frame f;
+        bootup_encode(&f, 6);
+        lssd_devices_heard(&ds, &f);
+        ck_assert(a->pending_reset);
+        bootup_encode(&f, 5);
+        lssd_devices_heard(&ds, &f);
+        ck_assert(!a->pending_reset);
+        ck_assert_str_eq(a->state, "assigned");
+        ck_assert_str_eq(r.log, "00000100_00000001_00000001_0000000a:State\n");
+        ck_assert_ptr_null(lssd_devices_holding(&ds, 5, &B));
+        lssd_devices_clear(&ds);
+}
+END_TEST
+
 static Suite *suite(void) {
         Suite *s = suite_create("daemon-devices");
         TCase *tc = tcase_create("registry");
         tcase_add_test(tc, add_find_known);
+        tcase_add_test(tc, held_node_ids);
         tcase_add_test(tc, update_publishes_changes);
         tcase_add_test(tc, remove_and_refuse);
         tcase_add_test(tc, reload_drops_never_seen_entries);
