@@ -9,6 +9,9 @@ lss_timeout_ms in the configuration). `lely.py NAME`:
   pool         blind AutoAssign, pool 71..90, of four: each a node-ID of its
                own, "in effect after the device's next reset"; a broadcast
                reset boots them there, and the next pass finds them unchanged
+  mapped       a map of full identities (61..64), and one configured device
+               re-addressed (30 -> 65): assigned, pending their reset, the
+               configured one at once; after the plant's reset, unchanged
   mapped-reset a map of full identities (61..64) with reset_after_pass: lssd
                resets the bus once and verifies every device by its boot-up
   scan         blind Scan of four non-configured and four configured (10..13):
@@ -122,6 +125,45 @@ def test_pool():
         env.alive()
 
 
+def test_mapped():
+    moved = Slave(V, P, R, 0x55, 30, profile='lely')
+    mapped = [(s, 61 + i) for i, s in enumerate(LELY)] + [(moved, 65)]
+    slaves = LELY + [moved]
+    with lely_env(slaves, config(mapped)) as env:
+        changes, outcomes, result = auto_assign(env)
+        expect_eq(result, 'done', 'result (a device pending its reset is no failure)')
+        for s, n in mapped[:4]:
+            kind, old, new, detail = outcomes[s.serial]
+            expect_eq((kind, old, new), ('assigned', 255, n), 'outcome of %x (%s)' % (s.serial, detail))
+            expect(PENDING in detail, 'the detail says it: %r' % detail)
+            expect_eq(state(env, s), (255, n, n), 'state of %x' % s.serial)
+            expect_eq(device_state(env, s), 'pending-reset', 'State of %x' % s.serial)
+        # a configured device takes its new node-ID at the NMT Reset Communication on its old one
+        kind, old, new, detail = outcomes[moved.serial]
+        expect_eq((kind, old, new, detail), ('assigned', 30, 65, ''), 'the configured device')
+        expect_eq(state(env, moved), (65, 65, 65), 'state of the configured device')
+
+        # a pass before the reset changes nothing and still says pending
+        start = len(env.lss_frames('vcan0'))
+        changes, outcomes, result = auto_assign(env)
+        expect_eq(result, 'done', 'second pass')
+        expect_eq(requests(env, CS_CONFIGURE_NODE_ID, start) + requests(env, CS_STORE, start), [],
+                  'the second pass configured or stored something')
+        expect_eq(sorted(device_state(env, s) for s, n in mapped[:4]), ['pending-reset'] * 4, 'States before the reset')
+
+        # the plant's reset makes it true; the next pass finds them unchanged
+        start = len(env.frames('vcan0'))
+        os.system('cansend vcan0 000#8200')
+        env.wait_until(lambda: len(bootups(env, start)) == 5, what='five boot-ups after the reset')
+        expect_eq(bootups(env, start), [61, 62, 63, 64, 65], 'boot-ups')
+        expect_eq(sorted(device_state(env, s) for s, n in mapped), ['assigned'] * 5, 'States after the boot-ups')
+        changes, outcomes, result = auto_assign(env)
+        expect_eq(result, 'done', 'third pass')
+        expect_eq(sorted(o[:3] for o in outcomes.values()), [('unchanged', n, n) for n in range(61, 66)],
+                  'third pass')
+        env.alive()
+
+
 def test_mapped_reset():
     mapped = [(s, 61 + i) for i, s in enumerate(LELY)]
     with lely_env(LELY, config(mapped, reset_after_pass=True)) as env:
@@ -198,7 +240,7 @@ def test_bitrate():
         env.alive()
 
 
-TESTS = {'pool': test_pool, 'mapped-reset': test_mapped_reset, 'scan': test_scan, 'mixed': test_mixed,
+TESTS = {'pool': test_pool, 'mapped': test_mapped, 'mapped-reset': test_mapped_reset, 'scan': test_scan, 'mixed': test_mixed,
          'bitrate': test_bitrate}
 
 if __name__ == '__main__':
