@@ -19,8 +19,9 @@ lss_timeout_ms in the configuration). `lely.py NAME`:
   mixed        lely, canopennode and plain slaves, configured and not: Scan
                finds each once, a blind AutoAssign gives each non-configured
                one a pool node-ID of its own
-  bitrate      SetBitrate with a Lely device that answers 13 01: refused,
-               naming it, before anything changes"""
+  bitrate      SetBitrate with four Lely devices (two configured) beside a
+               plain one: the first Lely device answers 13 01, the change is
+               refused, naming it, before anything changes"""
 
 import os
 import sys
@@ -228,11 +229,12 @@ def test_mixed():
 
 
 def test_bitrate():
-    slaves = [Slave(0x9A, 3, 1, 0x77, 21), Slave(V, P, R, 0x12, 20, profile='lely')]
+    lely = [Slave(V, P, R, 0x12 + i, 20 + i if i < 2 else 0xFF, profile='lely') for i in range(4)]
+    slaves = [Slave(0x9A, 3, 1, 0x77, 21)] + lely
     with lely_env(slaves, config(bitrate_change=True)) as env:
         name, msg = env.call_error(B0, BUS_IFACE, 'SetBitrate', 'uqa{sv}', 250000, 16, 0)
-        expect_eq(name, ERR + 'Rejected', 'SetBitrate with a Lely device: ' + msg)
-        expect('%08x:%08x:%08x:%08x' % slaves[1].identity in msg, 'the device is named: ' + msg)
+        expect_eq(name, ERR + 'Rejected', 'SetBitrate with Lely devices: ' + msg)
+        expect(any('%08x:%08x:%08x:%08x' % s.identity in msg for s in lely), 'a Lely device is named: ' + msg)
         expect_eq([f for f in env.lss_frames('vcan0') if f[1] == 0x7E5 and f[2][0] == 0x15], [],
                   'no Activate Bit Timing on the wire')
         for s in slaves:
