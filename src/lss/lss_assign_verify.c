@@ -13,10 +13,14 @@
  *     at the NMT Reset Communication it was sent): it gets its old node-ID
  *     back, read back by Inquire Node-ID (LSS_E_VERIFY, result.given_back);
  *   - silence, or a give-back that did not take: LSS_E_VERIFY with
- *     result.may_hold — N is kept for it. */
+ *     result.may_hold — N is kept for it.
+ * Its LSS asks wait patiently: silence here is a verdict. */
 #include "lss/lss_internal.h"
 
 #define SEND(m, pc, frame_expr) STEP_REQUEST(m, pc, frame_expr, -1)
+/* A device that fell silent is a verdict: its asks wait at least this long
+ * (a loaded host stalls an answer for 100-200 ms), twice */
+#define VERDICT_WAIT_FLOOR_US 250000u
 
 /* The answer of the step just done, from one slave, with this cs. */
 static bool one_answer(const lss_master *m) {
@@ -51,12 +55,16 @@ out:;
 
 int proc_assign_unverified(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->vpc);
+        s->patient = false;
         /* in effect, its boot-up lost: it answers SDO at N */
         step_node_in_use(m, s->node_id);
         PT_YIELD(&s->vpc);
         if (m->step.n_answers > 0)
                 goto out;
 
+        s->patient = !m->patient;
+        if (s->patient)
+                master_patient_begin(m, lss_timing_patient_wait(&m->timing, VERDICT_WAIT_FLOOR_US));
         SELECT_RETRIED(m, &s->vpc, s->attempt, &s->id);
         if (!step_answered(m)) {
                 m->result.may_hold = true;
@@ -95,6 +103,9 @@ int proc_assign_unverified(lss_master *m, lss_assign_state *s) {
                                s->node_id);
 waiting:
         SEND(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
-out:;
+out:
+        if (s->patient)
+                master_patient_end(m);
+        s->patient = false;
         PT_END(&s->vpc);
 }

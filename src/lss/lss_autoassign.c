@@ -10,10 +10,6 @@
 #include "lss/lss_autoassign_state.h"
 #include "lss/lss_replace.h"
 
-/* The second look: waits this many times the configured timeout (or twice
- * the slowest answer seen, when that is longer), up to a second. */
-#define PATIENT_FACTOR 4u
-#define PATIENT_MAX_US 1000000u
 
 void lss_autoassign_free_state(lss_master *m) {
         if (!m->aa)
@@ -258,16 +254,6 @@ static int proc_map_direct(lss_master *m, lss_aa_state *s) {
         PT_END(&s->d_pc);
 }
 
-/* The wait of the second look: the bus or the host was slower than the
- * configured timeout allowed for, so well beyond it. */
-static uint32_t patient_wait(const lss_master *m, const lss_aa_state *s) {
-        uint64_t w = (uint64_t) s->timing.timeout_us * PATIENT_FACTOR;
-        uint64_t seen = 2ull * lss_timing_max(&m->timing);
-        if (seen > w)
-                w = seen;
-        return (uint32_t) (w < PATIENT_MAX_US ? w : PATIENT_MAX_US);
-}
-
 /* The lowest pool node-ID not given, not taken and nobody is set aside
  * with (0: none). */
 static uint8_t pool_next_direct(const lss_aa_state *s, const bool *aside) {
@@ -395,13 +381,10 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
  * is for a slow answer (and a frame lost on the way, once). */
 static int second_look(lss_master *m, lss_aa_state *s) {
         PT_BEGIN(&s->l_pc);
-        s->timing = m->timing.cfg;
-        m->stats.patient_wait_us = patient_wait(m, s);
-        m->timing.cfg.timeout_us = m->stats.patient_wait_us;
-        m->timing.cfg.guard_floor_us = m->stats.patient_wait_us / 4;
-        m->timing.cfg.adaptive = false;
-        if (m->timing.cfg.retries > 1)
-                m->timing.cfg.retries = 1;
+        /* the bus or the host was slower than the configured timeout allowed
+         * for, so well beyond it */
+        m->stats.patient_wait_us = lss_timing_patient_wait(&m->timing, 0);
+        master_patient_begin(m, m->stats.patient_wait_us);
         s->patient = true;
         if (stops(s)) {
                 STEP_REQUEST(m, &s->l_pc, nmt_encode(&f__, NMT_CS_STOP, 0), -1);
@@ -411,7 +394,7 @@ static int second_look(lss_master *m, lss_aa_state *s) {
         }
         s->d_pc = 0;
         PT_CALL(&s->l_pc, proc_map_direct(m, s));
-        m->timing.cfg = s->timing;
+        master_patient_end(m);
         s->patient = false;
         PT_END(&s->l_pc);
 }

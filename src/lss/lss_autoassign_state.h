@@ -11,7 +11,6 @@ typedef struct lss_aa_state {
         /* the pass, and its children: handle_found, map direct,
          * enumeration, second look */
         int pc, i_pc, d_pc, e_pc, l_pc;
-        lss_timing_config timing;  /* the configured timing, kept during the second look */
         bool patient;              /* the second look runs */
         lss_outcome *first;        /* per map entry: its outcome before the second look (kind MISSING: none) */
         const lss_autoassign_plan *plan;

@@ -150,6 +150,7 @@ typedef struct lss_assign_state {
         lss_fastscan_state fs;
         int vpc, gpc;           /* proc_assign_unverified, proc_give_back */
         uint8_t held;           /* the node-ID the slave answered Inquire Node-ID with there */
+        bool patient;           /* proc_assign_unverified made the waits patient (and ends it) */
         uint64_t until;         /* unassign: the reset slave must answer 255 by then */
         uint8_t seen;           /* unassign: the node-ID it answered after the reset (0: none) */
 } lss_assign_state;
@@ -292,6 +293,10 @@ struct lss_master {
         uint64_t strays_until;    /* stray answers until then are of the stall that last
                                    * lengthened the waits (step_on_stray) */
 
+        /* master_patient_begin(): the configured timing, back at _end */
+        lss_timing_config calm_cfg;
+        bool patient;
+
         lss_result result;
         lss_device *devices;
         size_t n_devices, cap_devices;
@@ -388,6 +393,11 @@ int master_add_device(lss_master *m, const lss_identity *id, uint8_t node_id);
  * identity in an operation. */
 void master_found(lss_master *m, const lss_identity *id, uint8_t node_id, uint8_t aside_node_id);
 void master_progress(lss_master *m, double p);
+/* Patient waits, for a verdict: every step waits `wait_us` (not adaptive,
+ * guards a quarter of it), asked at most twice, until master_patient_end()
+ * (or the next operation's start: a cancel may skip the end). */
+void master_patient_begin(lss_master *m, uint32_t wait_us);
+void master_patient_end(lss_master *m);
 
 /* procedures */
 int proc_fastscan(lss_master *m, lss_fastscan_state *s);

@@ -87,6 +87,7 @@ void lss_master_set_timing(lss_master *m, const lss_timing_config *cfg) {
         m->timing.n_samples = t.n_samples;
         m->timing.next = t.next;
         m->timing.patience_us = t.patience_us;
+        m->patient = false; /* the new configuration holds at once */
 }
 
 void lss_master_set_progress(lss_master *m, lss_progress_fn fn, void *userdata) {
@@ -212,9 +213,27 @@ static void advance(lss_master *m) {
         }
 }
 
+void master_patient_begin(lss_master *m, uint32_t wait_us) {
+        if (!m->patient)
+                m->calm_cfg = m->timing.cfg;
+        m->patient = true;
+        m->timing.cfg.timeout_us = wait_us;
+        m->timing.cfg.guard_floor_us = wait_us / 4;
+        m->timing.cfg.adaptive = false;
+        if (m->timing.cfg.retries > 1)
+                m->timing.cfg.retries = 1;
+}
+
+void master_patient_end(lss_master *m) {
+        if (m->patient)
+                m->timing.cfg = m->calm_cfg;
+        m->patient = false;
+}
+
 static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t now) {
         if (m->running)
                 return -EBUSY;
+        master_patient_end(m);
         m->proc = proc;
         m->procedure = procedure;
         m->pc = 0;

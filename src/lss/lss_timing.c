@@ -120,6 +120,16 @@ uint32_t lss_timing_patience_cap(const lss_timing *t) {
         return (uint32_t) (cap < LSS_PATIENCE_MAX_US ? cap : LSS_PATIENCE_MAX_US);
 }
 
+uint32_t lss_timing_patient_wait(const lss_timing *t, uint32_t floor_us) {
+        uint64_t w = (uint64_t) t->cfg.timeout_us * LSS_PATIENCE_FACTOR;
+        uint64_t seen = 2ull * lss_timing_max(t);
+        if (seen > w)
+                w = seen;
+        if (floor_us > w)
+                w = floor_us;
+        return (uint32_t) (w < LSS_PATIENCE_MAX_US ? w : LSS_PATIENCE_MAX_US);
+}
+
 static void set_patience(lss_timing *t, uint64_t p) {
         uint64_t cap = lss_timing_patience_cap(t);
         t->patience_us = (uint32_t) (p < cap ? p : cap);

@@ -86,6 +86,11 @@ uint32_t lss_timing_late_guard(const lss_timing *t, enum lss_wait_kind kind);
 /* The longest wait patience may grow to: LSS_PATIENCE_FACTOR x timeout, at
  * most LSS_PATIENCE_MAX_US. */
 uint32_t lss_timing_patience_cap(const lss_timing *t);
+/* A wait for a verdict (a device missing, an assignment not verified): the
+ * bus or the host was slower than the configured timeout allowed for, so
+ * well beyond it: LSS_PATIENCE_FACTOR x timeout or twice the slowest answer
+ * seen, at least `floor_us`, at most LSS_PATIENCE_MAX_US. */
+uint32_t lss_timing_patient_wait(const lss_timing *t, uint32_t floor_us);
 /* The late guard of a discovery step whose silence nothing checks later (a
  * Scan's last ping): with the wait, as long as patience may grow; a late
  * answer in it counts and makes the waits patient. */

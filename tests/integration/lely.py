@@ -229,7 +229,7 @@ def test_mixed():
 
 
 def test_bitrate():
-    lely = [Slave(V, P, R, 0x12 + i, 20 + i if i < 2 else 0xFF, profile='lely') for i in range(4)]
+    lely = [Slave(V, P, R, 0x12 + i, 22 + i if i < 2 else 0xFF, profile='lely') for i in range(4)]
     slaves = [Slave(0x9A, 3, 1, 0x77, 21)] + lely
     with lely_env(slaves, config(bitrate_change=True)) as env:
         name, msg = env.call_error(B0, BUS_IFACE, 'SetBitrate', 'uqa{sv}', 250000, 16, 0)

@@ -157,6 +157,30 @@ START_TEST(silent_after_store_may_hold) {
 }
 END_TEST
 
+/* Makes the slave stall every answer by 150 ms once it answered Store: a
+ * loaded host (a VM stalled 100-200 ms). */
+static void stalls_after_store(void *ud, const lss_frame *f, uint64_t t) {
+        lss_slave *s = ud;
+        (void) t;
+        if (lss_is_response(f) && f->data[0] == LSS_CS_STORE)
+                s->faults.latency_us = 150000;
+}
+
+/* The verification's asks are a verdict: they wait patiently (before: four
+ * asks at the adaptive wait, a few ms, and "may hold node-ID 8": failed). */
+START_TEST(stalled_verification_waits) {
+        lss_slave_faults f = lely();
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 0xFF, &f);
+        membus_set_trace(b, stalls_after_store, membus_slave(b, 0));
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 8, ASSIGN, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK && r->pending_reset, "%s", r->message);
+        pass_free(m, b);
+}
+END_TEST
+
 /* Pool node-IDs held by the slaves of the bus, pending or active or stored:
  * never one twice. */
 static void expect_no_shared_node_id(membus *b) {
@@ -309,6 +333,7 @@ static void add(TCase *tc) {
         tcase_add_test(tc, lely_configured_reset_boots);
         tcase_add_test(tc, not_taken_at_reset_given_back);
         tcase_add_test(tc, silent_after_store_may_hold);
+        tcase_add_test(tc, stalled_verification_waits);
         tcase_add_test(tc, lely_pool_pass_distinct_node_ids);
         tcase_add_test(tc, lely_pool_pass_reset_after);
         tcase_add_test(tc, lely_mapped_pending_reset);
