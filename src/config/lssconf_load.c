@@ -3,17 +3,16 @@
  * plain structs, checking every key's type and range on the way. It keeps
  * going after an error so that one run reports every problem. */
 #include <errno.h>
-#include <fcntl.h>
 #include <inttypes.h>
 #include <libconfig.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "config/lssconf.h"
 #include "config/lssconf_check.h"
 #include "config/lssconf_prescan.h"
+#include "config/lssconf_read.h"
 
 typedef struct loader {
         const char *name;
@@ -585,77 +584,16 @@ int lssconf_load_buffer(const char *text, size_t len, const char *name,
         return r;
 }
 
-/* Reads at most LSSCONF_SIZE_MAX bytes; -EFBIG if there is more. */
-static int read_all(int fd, char **ret, size_t *ret_len) {
-        size_t len = 0, allocated = 0;
-        char *buf = NULL;
-
-        for (;;) {
-                if (len == allocated) {
-                        if (allocated > LSSCONF_SIZE_MAX) {
-                                free(buf);
-                                return -EFBIG;
-                        }
-                        /* one byte over the limit tells "too big" from "exactly the limit" */
-                        size_t n = allocated ? allocated * 2 : 16384;
-                        if (n > LSSCONF_SIZE_MAX)
-                                n = LSSCONF_SIZE_MAX + 1;
-                        char *b = realloc(buf, n);
-                        if (!b) {
-                                free(buf);
-                                return -ENOMEM;
-                        }
-                        buf = b;
-                        allocated = n;
-                }
-                ssize_t k = read(fd, buf + len, allocated - len);
-                if (k < 0) {
-                        if (errno == EINTR)
-                                continue;
-                        int e = -errno;
-                        free(buf);
-                        return e;
-                }
-                if (k == 0)
-                        break;
-                len += (size_t) k;
-        }
-        if (len > LSSCONF_SIZE_MAX) {
-                free(buf);
-                return -EFBIG;
-        }
-        *ret = buf;
-        *ret_len = len;
-        return 0;
-}
-
 int lssconf_load_file(const char *path, lssconf **ret, lssconf_diag *diag) {
         lssconf_diag local = LSSCONF_DIAG_INIT;
         lssconf_diag *d = diag ? diag : &local;
         char *text = NULL;
         size_t len = 0;
-        int r;
 
         *ret = NULL;
-        int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY);
-        if (fd < 0) {
-                r = -errno;
-                lssconf_diag_add(d, LSSCONF_DIAG_ERROR, "%s: cannot open: %s", path, strerror(-r));
-                goto finish;
-        }
-        r = read_all(fd, &text, &len);
-        close(fd);
-        if (r == -EFBIG)
-                lssconf_diag_add(d, LSSCONF_DIAG_ERROR, "%s: larger than %u bytes, refusing to read it",
-                              path, LSSCONF_SIZE_MAX);
-        else if (r < 0 && r != -ENOMEM)
-                lssconf_diag_add(d, LSSCONF_DIAG_ERROR, "%s: cannot read: %s", path, strerror(-r));
-        if (r < 0)
-                goto finish;
-
-        r = lssconf_load_buffer(text, len, path, ret, d);
-
-finish:
+        int r = lssconf_read_text(path, LSSCONF_SIZE_MAX, &text, &len, d);
+        if (r >= 0)
+                r = lssconf_load_buffer(text, len, path, ret, d);
         free(text);
         lssconf_diag_clear(&local);
         return r;

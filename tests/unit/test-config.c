@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "config/lssconf.h"
+#include "diag-util.h"
 #include "sim/sim_random.h"
 #include "util/time_util.h"
 
@@ -56,38 +57,6 @@ static int load_len(const char *text, size_t len, lssconf **ret, lssconf_diag *d
 static int load(const char *text, lssconf **ret, lssconf_diag *d) {
         return load_len(text, strlen(text), ret, d);
 }
-
-/* A message of that severity containing every one of the NULL-terminated substrings. */
-static bool has_message(const lssconf_diag *d, lssconf_diag_severity sev, ...) {
-        for (size_t i = 0; i < d->n_messages; i++) {
-                if (d->messages[i].severity != sev)
-                        continue;
-                bool all = true;
-                va_list ap;
-                va_start(ap, sev);
-                for (const char *s; (s = va_arg(ap, const char *)); )
-                        if (!strstr(d->messages[i].text, s))
-                                all = false;
-                va_end(ap);
-                if (all)
-                        return true;
-        }
-        return false;
-}
-
-static void dump(const lssconf_diag *d) {
-        for (size_t i = 0; i < d->n_messages; i++)
-                fprintf(stderr, "  %s: %s\n", lssconf_diag_severity_to_string(d->messages[i].severity),
-                        d->messages[i].text);
-}
-
-#define expect_message(d, sev, ...) \
-        do { \
-                if (!has_message(d, sev, __VA_ARGS__, (const char *) NULL)) { \
-                        dump(d); \
-                        ck_abort_msg("no %s with: %s", lssconf_diag_severity_to_string(sev), #__VA_ARGS__); \
-                } \
-        } while (0)
 
 /* The text must fail to load with an error carrying all the substrings. */
 #define expect_load_error(text, ...) \
