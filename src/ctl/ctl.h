@@ -77,3 +77,4 @@ int verb_set_bitrate(ctl_context *c);
 int verb_reload(ctl_context *c);
 int verb_monitor(ctl_context *c);
 int verb_raw(ctl_context *c);
+int verb_import_dcf(ctl_context *c);

@@ -30,6 +30,7 @@ enum {
         OPT_AS_CONFIG = 1 << 13,
         OPT_NO_SDO = 1 << 14,
         OPT_GLOBAL = 1 << 15,
+        OPT_LAST = OPT_GLOBAL,
 };
 
 typedef struct verb {
@@ -57,6 +58,7 @@ static const verb verbs[] = {
         { "reload", 0, 0, OPT_QUIET, false, verb_reload },
         { "monitor", 0, 0, OPT_BUS | OPT_JSON, false, verb_monitor },
         { "raw", 1, -1, OPT_BUS | OPT_JSON, false, verb_raw },
+        { "import-dcf", 1, -1, OPT_BUS, false, verb_import_dcf },
 };
 
 static void help(void) {
@@ -74,11 +76,13 @@ static void help(void) {
                "  set-bitrate BITRATE      Switch every slave and the interface to BITRATE\n"
                "  reload                   Make lssd read its configuration again\n"
                "  monitor                  Show signals and property changes until ^C\n"
-               "  raw SERVICE [ARGS]...    Run raw LSS services while holding the bus\n\n"
+               "  raw SERVICE [ARGS]...    Run raw LSS services while holding the bus\n"
+               "  import-dcf FILE...       Print the map of CiA 306 DCFs as the buses of lssd.conf(5)\n"
+               "                           (no lssd needed)\n\n"
                "Options:\n"
                "  -h --help                Show this help\n"
                "     --version             Show the version\n"
-               "  -b --bus IFACE           Act on this CAN interface only\n"
+               "  -b --bus IFACE           Act on this CAN interface only (import-dcf: the bus printed)\n"
                "     --json                JSON output (status, list, scan, assign, unassign, auto-assign, monitor,\n"
                "                           raw)\n"
                "     --no-pager            Do not pipe output into a pager\n"
@@ -346,7 +350,7 @@ int main(int argc, char *argv[]) {
                                            : ctl_usage(&c, "Too many arguments for '%s'.", v->name);
                 goto finish;
         }
-        for (unsigned flag = 1; flag <= OPT_AS_CONFIG; flag <<= 1)
+        for (unsigned flag = 1; flag <= OPT_LAST; flag <<= 1)
                 if ((given & flag) && !(v->options & flag)) {
                         r = ctl_usage(&c, "Option %s does not go with '%s'.", option_name(flag), v->name);
                         goto finish;

@@ -1,0 +1,132 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/* import-dcf: no lssd needed. */
+#include <errno.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "config/dcf.h"
+#include "ctl/ctl_dcf.h"
+#include "ctl/ctl_errors.h"
+#include "ctl/ctl_map_entry.h"
+#include "lss/lss_proto.h"
+
+/* ---- import-dcf ---- */
+
+/* the interface of the printed bus: what lssd.conf(5) takes, printable */
+static bool ifname_printable(const char *s) {
+        size_t n = strlen(s);
+        if (n == 0 || n > 15)
+                return false;
+        for (; *s; s++)
+                if ((unsigned char) *s <= ' ' || (unsigned char) *s >= 0x7F || *s == '"' || *s == '\\' || *s == '/' ||
+                    *s == ':')
+                        return false;
+        return true;
+}
+
+static int compare_entries(const void *a, const void *b) {
+        const dcf_entry *x = *(const dcf_entry *const *) a, *y = *(const dcf_entry *const *) b;
+        return (x->node_id > y->node_id) - (x->node_id < y->node_id);
+}
+
+/* "FILE:LINE (NodeName "X")" */
+static void print_source(const dcf_map *m, size_t file, unsigned line, const char *node_name) {
+        printf("%s:%u", m->files[file].name, line);
+        if (node_name)
+                printf(" (NodeName \"%s\")", node_name);
+}
+
+static void print_bus(const ctl_context *c, const dcf_map *m, uint32_t kbit) {
+        const dcf_entry **v = calloc(m->n_entries ? m->n_entries : 1, sizeof(*v));
+        size_t n_dcf = 0;
+        for (size_t i = 0; i < m->n_files; i++)
+                n_dcf += m->files[i].dcf;
+        for (size_t i = 0; v && i < m->n_entries; i++)
+                v[i] = &m->entries[i];
+        if (v)
+                qsort(v, m->n_entries, sizeof(*v), compare_entries);
+
+        printf("# lssd.conf(5) buses from CiA 306 DCFs by 'lssctl import-dcf', lssctl %s:\n", LSSCTL_VERSION);
+        printf("# %zu device%s from %zu file%s", m->n_entries, m->n_entries == 1 ? "" : "s", n_dcf,
+               n_dcf == 1 ? "" : "s");
+        if (m->n_left_out > 0)
+                printf(", %zu left out (see there)", m->n_left_out);
+        printf(".\n"
+               "# It replaces the buses = ( ... ); of lssd's configuration file (lssd.conf(5):\n"
+               "# /etc/lssd/lssd.conf unless lssd runs with --config), or extends it by\n"
+               "# this bus; the global settings there stay. lssd can also read the DCFs\n"
+               "# itself: dcf = [ \"/etc/lssd/dcf/*.dcf\" ]; in the bus instead of devices.\n"
+               "# Check the file with 'lssd --check-config FILE', then 'lssctl reload'.\n"
+               "buses = (\n"
+               "  {\n");
+        if (c->bus_name)
+                printf("    interface = \"%s\";\n", c->bus_name);
+        else
+                printf("    interface = \"can0\";   # no --bus IFACE given: the interface of this network\n");
+        if (kbit > 0 && kbit <= UINT32_MAX / 1000 && lss_bit_timing_index(kbit * 1000) >= 0)
+                printf("    bitrate = %" PRIu32 ";   # the DCFs' Baudrate\n", kbit * 1000);
+        else if (kbit > 0)
+                printf("    # bitrate = ...;  the DCFs' Baudrate %" PRIu32 " kbit/s is no CiA 301 bit rate: give it\n",
+                       kbit);
+        else
+                printf("    # bitrate = ...;  the DCFs do not say the bit rate (Baudrate): give it\n");
+        printf("    auto_assign = true;   # at start, every device below gets its node-ID\n"
+               "    devices = (\n");
+        for (size_t i = 0; v && i < m->n_entries; i++) {
+                const dcf_entry *e = v[i];
+                uint32_t id[4] = { e->identity.vendor, e->identity.product, e->identity.revision, e->identity.serial };
+                ctl_print_map_entry(id, e->has_revision, e->node_id, true, i + 1 < m->n_entries);
+                printf("  # ");
+                print_source(m, e->file, e->line, e->node_name);
+                if (e->merged)
+                        printf(", also %s:%u", m->files[e->also_file].name, e->also_line);
+                putchar('\n');
+        }
+        for (size_t i = 0; i < m->n_left_out; i++) {
+                const dcf_left_out *l = &m->left_out[i];
+                printf("      # left out: ");
+                print_source(m, l->file, l->line, l->node_name);
+                printf(": %s\n", l->why);
+        }
+        printf("    );\n"
+               "  }\n"
+               ");\n");
+        free(v);
+}
+
+int verb_import_dcf(ctl_context *c) {
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        dcf_map m;
+        int r = 0;
+
+        if (c->bus_name && !ifname_printable(c->bus_name))
+                return ctl_usage(c, "Invalid --bus '%s': an interface name of 1..15 characters.", c->bus_name);
+        dcf_map_init(&m);
+        /* every file, so that one run names every problem */
+        for (int i = 0; i < c->n_args && r != -ENOMEM; i++) {
+                int k = dcf_map_read_file(&m, c->args[i], &d);
+                if (k < 0)
+                        r = k;
+        }
+        uint32_t kbit = r >= 0 ? dcf_map_baudrate(&m, &d) : 0;
+        for (size_t i = 0; i < d.n_messages; i++)
+                fprintf(stderr, "lssctl: %s%s\n", d.messages[i].severity == LSSCONF_DIAG_WARNING ? "warning: " : "",
+                        d.messages[i].text);
+        if (d.n_dropped > 0)
+                fprintf(stderr, "lssctl: (%zu more messages)\n", d.n_dropped);
+        if (r == -ENOMEM || d.oom)
+                r = ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
+        else if (r < 0 || d.n_errors > 0)
+                r = ctl_fail(c, CTL_EXIT_BAD_CONFIG, -EINVAL, "%zu error%s in the DCFs (above): no map printed.",
+                             d.n_errors, d.n_errors == 1 ? "" : "s");
+        else {
+                print_bus(c, &m, kbit);
+                if (m.n_entries == 0)
+                        fprintf(stderr, "lssctl: warning: no device of these files can be a map entry.\n");
+        }
+        dcf_map_done(&m);
+        lssconf_diag_clear(&d);
+        return r;
+}
