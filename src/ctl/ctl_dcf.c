@@ -1,10 +1,14 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
-/* import-dcf: no lssd needed. */
+/* import-dcf (no lssd needed) and the writing of scan --as-dcf. */
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "config/dcf.h"
 #include "ctl/ctl_dcf.h"
@@ -129,4 +133,100 @@ int verb_import_dcf(ctl_context *c) {
         dcf_map_done(&m);
         lssconf_diag_clear(&d);
         return r;
+}
+
+/* ---- scan --as-dcf ---- */
+
+static void write_object(FILE *f, unsigned sub, const char *name, const char *type, uint32_t value) {
+        fprintf(f, "[1018sub%u]\r\nParameterName=%s\r\nObjectType=0x7\r\nDataType=%s\r\nAccessType=ro\r\n", sub, name,
+                type);
+        if (sub == 0)
+                fprintf(f, "DefaultValue=%" PRIu32 "\r\n", value);
+        else
+                fprintf(f, "ParameterValue=0x%08" PRIX32 "\r\n", value);
+        fprintf(f, "PDOMapping=0\r\n\r\n");
+}
+
+/* The fragment, CRLF as CiA 306 tools write it. */
+static void write_dcf(FILE *f, const char *file_name, const ctl_dcf_device *d, const struct tm *tm) {
+        char date[16] = "", hm[16] = "", when[32] = "";
+        strftime(date, sizeof(date), "%m-%d-%Y", tm);
+        strftime(hm, sizeof(hm), "%I:%M%p", tm);
+        strftime(when, sizeof(when), "%Y-%m-%d %H:%M:%S UTC", tm);
+        fprintf(f, "; A DCF fragment: the identity and node-ID of one device as lssd found it.\r\n"
+                "[FileInfo]\r\nFileName=%s\r\nFileVersion=1\r\nFileRevision=0\r\nEDSVersion=4.0\r\n"
+                "Description=Device at node-ID %u on %s, found by lssctl scan --as-dcf, %s\r\n"
+                "CreationTime=%s\r\nCreationDate=%s\r\nCreatedBy=lssctl %s\r\n\r\n",
+                file_name, d->node_id, d->ifname, when, hm, date, LSSCTL_VERSION);
+        fprintf(f, "[DeviceInfo]\r\nVendorNumber=0x%08" PRIX32 "\r\nProductNumber=0x%08" PRIX32 "\r\n"
+                "RevisionNumber=0x%08" PRIX32 "\r\nLSS_Supported=1\r\n\r\n", d->id[0], d->id[1], d->id[2]);
+        fprintf(f, "[DeviceComissioning]\r\nNodeID=%u\r\n", d->node_id);
+        if (d->bitrate > 0)
+                fprintf(f, "Baudrate=%" PRIu32 "\r\n", d->bitrate / 1000);
+        fprintf(f, "LSS_SerialNumber=0x%08" PRIX32 "\r\n\r\n", d->id[3]);
+        fprintf(f, "[1018]\r\nParameterName=Identity object\r\nObjectType=0x9\r\nSubNumber=5\r\n\r\n");
+        write_object(f, 0, "Highest sub-index supported", "0x0005", 4);
+        write_object(f, 1, "Vendor-ID", "0x0007", d->id[0]);
+        write_object(f, 2, "Product code", "0x0007", d->id[1]);
+        write_object(f, 3, "Revision number", "0x0007", d->id[2]);
+        write_object(f, 4, "Serial number", "0x0007", d->id[3]);
+}
+
+/* DIR/NAME through a temporary file, renamed over the old one when whole */
+static int write_one(ctl_context *c, const char *dir, const ctl_dcf_device *d, const struct tm *tm, char **ret_path) {
+        char name[64], *path = NULL, *tmp = NULL;
+        int r;
+
+        snprintf(name, sizeof(name), "%s-node%03u.dcf", d->ifname, d->node_id);
+        if (asprintf(&path, "%s/%s", dir, name) < 0 || asprintf(&tmp, "%s/.%s.XXXXXX", dir, name) < 0) {
+                free(path);
+                return ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
+        }
+        int fd = mkostemp(tmp, O_CLOEXEC);
+        FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
+        if (!f) {
+                r = -errno;
+                if (fd >= 0) {
+                        close(fd);
+                        unlink(tmp);
+                }
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to write %s: %s", path, strerror(-r));
+                goto finish;
+        }
+        (void) fchmod(fileno(f), 0644);
+        write_dcf(f, name, d, tm);
+        bool bad = ferror(f);
+        r = fclose(f) != 0 ? -errno : bad ? -EIO : rename(tmp, path) < 0 ? -errno : 0;
+        if (r < 0) {
+                unlink(tmp);
+                r = ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to write %s: %s", path, strerror(-r));
+                goto finish;
+        }
+        *ret_path = path;
+        path = NULL;
+        r = 0;
+finish:
+        free(path);
+        free(tmp);
+        return r;
+}
+
+int ctl_write_dcfs(ctl_context *c, const char *dir, const ctl_dcf_device *v, size_t n) {
+        time_t now = time(NULL);
+        struct tm tm;
+
+        if (mkdir(dir, 0755) < 0 && errno != EEXIST)
+                return ctl_fail(c, CTL_EXIT_FAILURE, -errno, "Failed to make the folder %s: %s", dir, strerror(errno));
+        if (!gmtime_r(&now, &tm))
+                memset(&tm, 0, sizeof(tm));
+        for (size_t i = 0; i < n; i++) {
+                char *path = NULL;
+                int r = write_one(c, dir, &v[i], &tm, &path);
+                if (r < 0)
+                        return r;
+                printf("%s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 " at node-ID %u: %s\n",
+                       v[i].ifname, v[i].id[0], v[i].id[1], v[i].id[2], v[i].id[3], v[i].node_id, path);
+                free(path);
+        }
+        return 0;
 }

@@ -30,7 +30,8 @@ enum {
         OPT_AS_CONFIG = 1 << 13,
         OPT_NO_SDO = 1 << 14,
         OPT_GLOBAL = 1 << 15,
-        OPT_LAST = OPT_GLOBAL,
+        OPT_AS_DCF = 1 << 16,
+        OPT_LAST = OPT_AS_DCF,
 };
 
 typedef struct verb {
@@ -44,7 +45,8 @@ typedef struct verb {
 static const verb verbs[] = {
         { "status", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER, true, verb_status },
         { "list", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND, true, verb_list },
-        { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR | OPT_AS_CONFIG | OPT_NO_SDO,
+        { "scan", 0, 0,
+          OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR | OPT_AS_CONFIG | OPT_NO_SDO | OPT_AS_DCF,
           false, verb_scan },
         { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false,
           verb_assign },
@@ -102,6 +104,7 @@ static void help(void) {
                "     --vendor ID --product ID\n"
                "                           Also look for configured slaves of this pair (scan)\n"
                "     --as-config           Print what scan found as the buses of lssd.conf(5), a map\n"
+               "     --as-dcf DIR          scan: write a CiA 306 DCF fragment per configured device found into DIR\n"
                "     --no-sdo              scan: LSS only, do not ask every node-ID for its identity by SDO\n\n"
                "See the lssctl(1) man page for details and the exit codes.\n");
 }
@@ -123,6 +126,7 @@ enum {
         ARG_AS_CONFIG,
         ARG_NO_SDO,
         ARG_GLOBAL,
+        ARG_AS_DCF,
 };
 
 static const char *option_name(unsigned flag) {
@@ -143,6 +147,7 @@ static const char *option_name(unsigned flag) {
         case OPT_AS_CONFIG: return "--as-config";
         case OPT_NO_SDO: return "--no-sdo";
         case OPT_GLOBAL: return "--global";
+        case OPT_AS_DCF: return "--as-dcf";
         default: return "?";
         }
 }
@@ -175,6 +180,7 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 { "dry-run", no_argument, NULL, ARG_DRY_RUN },
                 { "reset", no_argument, NULL, ARG_RESET },
                 { "as-config", no_argument, NULL, ARG_AS_CONFIG },
+                { "as-dcf", required_argument, NULL, ARG_AS_DCF },
                 { "no-sdo", no_argument, NULL, ARG_NO_SDO },
                 { "global", no_argument, NULL, ARG_GLOBAL },
                 { "quiet", no_argument, NULL, 'q' },
@@ -263,6 +269,12 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 case ARG_AS_CONFIG:
                         c->as_config = true;
                         *given |= OPT_AS_CONFIG;
+                        break;
+                case ARG_AS_DCF:
+                        if (!*optarg)
+                                return ctl_usage(c, "--as-dcf needs a folder.");
+                        c->as_dcf = optarg;
+                        *given |= OPT_AS_DCF;
                         break;
                 case 'q':
                         c->quiet = true;
@@ -355,9 +367,13 @@ int main(int argc, char *argv[]) {
                         r = ctl_usage(&c, "Option %s does not go with '%s'.", option_name(flag), v->name);
                         goto finish;
                 }
-        if (c.as_config && (c.json || c.no_legend)) {
+        if (c.as_config && (c.json || c.no_legend || c.as_dcf)) {
                 r = ctl_usage(&c, "--as-config does not go with %s: it prints lssd.conf(5) text.",
-                              c.json ? "--json" : "--no-legend");
+                              c.json ? "--json" : c.no_legend ? "--no-legend" : "--as-dcf");
+                goto finish;
+        }
+        if (c.as_dcf && (c.json || c.no_legend)) {
+                r = ctl_usage(&c, "--as-dcf does not go with %s: it writes files.", c.json ? "--json" : "--no-legend");
                 goto finish;
         }
         if (c.has_vendor != c.has_product) {

@@ -688,13 +688,25 @@ def dcf_files():
     return {'drive-left.dcf': left, 'drive-right.dcf': right, 'master.dcf': master, 'spare.dcf': spare}
 
 
+def map_entries(text):
+    """{serial: node-ID} of the active map entries lssctl printed."""
+    entries = {}
+    for x in text.splitlines():
+        m = re.search(r'^\s*\{ vendor = .* serial = 0x([0-9a-f]{8}); node_id = (\d+); \}', x)
+        if m:
+            entries[int(m.group(1), 16)] = int(m.group(2))
+    return entries
+
+
 def test_dcf():
     """lssd's map from the integrator's DCFs: lely-core's NMT master and slave
     DCFs (public files) and the DCFs of the rest of the network, read through
     the bus's `dcf` patterns and merged with its `devices`; lssd
     --check-config shows each entry with its file, lssctl import-dcf prints
     the same map, the boot pass (default timing) puts every device at its
-    node-ID, and a reload with a bad DCF names it and keeps the map."""
+    node-ID, scan --as-dcf writes the DCFs of what it found, which
+    import-dcf reads into the same map, and a reload with a bad DCF names it
+    and keeps the map."""
     cfg = ('buses = (\n  {\n    interface = "vcan0";\n    auto_assign = true;\n'
            '    devices = ( { vendor = 0xEC; product = 0x1234; serial = 0x%x; node_id = %d; } );\n'
            '    dcf = [ "dcf/*.dcf" ];\n  }\n);\n' % (DCF_CONF.serial, DCF_MAP[DCF_CONF.serial]))
@@ -733,12 +745,7 @@ def test_dcf():
         rc, out, err = lssctl(env, 'import-dcf', '--bus', 'vcan0', *sorted(glob.glob(os.path.join(folder, '*.dcf'))))
         env.step('lssctl import-dcf:\n' + out + err)
         expect_eq((rc, err), (0, ''), 'lssctl import-dcf')
-        printed = {}
-        for x in out.splitlines():
-            m = re.search(r'^\s*\{ vendor = .* serial = 0x([0-9a-f]{8}); node_id = (\d+); \}', x)
-            if m:
-                printed[int(m.group(1), 16)] = int(m.group(2))
-        expect_eq(printed, {s: n for s, n in DCF_MAP.items() if s != DCF_CONF.serial}, 'import-dcf entries')
+        expect_eq(map_entries(out), {s: n for s, n in DCF_MAP.items() if s != DCF_CONF.serial}, 'import-dcf entries')
         expect('bitrate = 125000;' in out, 'the DCFs\' Baudrate: %r' % out)
 
         # the boot pass at lssd's default timing: every device at its node-ID
@@ -756,6 +763,18 @@ def test_dcf():
             expect_eq(got, {s.serial: ((DCF_MAP[s.serial],) * 2 if s.serial in DCF_MAP else (255, 255))
                             for s in DCF_SLAVES}, 'active and stored node-IDs after the boot pass')
             expect(all_waiting(env, 'vcan0', DCF_SLAVES), 'slaves left in configuration')
+
+        # and back out: a DCF fragment per device found, which import-dcf
+        # reads into the same map
+        out_dir = os.path.join(env.dir, 'found')
+        rc, out, err = lssctl(env, 'scan', '--as-dcf', out_dir)
+        env.step('lssctl scan --as-dcf:\n' + out + err)
+        expect_eq((rc, err), (0, ''), 'lssctl scan --as-dcf')
+        expect_eq(sorted(os.listdir(out_dir)), sorted('vcan0-node%03d.dcf' % n for n in DCF_MAP.values()),
+                  'the DCFs written')
+        rc, out, err = lssctl(env, 'import-dcf', '--bus', 'vcan0', *sorted(glob.glob(os.path.join(out_dir, '*.dcf'))))
+        expect_eq((rc, err), (0, ''), 'lssctl import-dcf of what scan --as-dcf wrote')
+        expect_eq(map_entries(out), DCF_MAP, 'the map read back from scan --as-dcf')
 
         # a bad DCF on reload: named, the map stays; fixed, it is read
         bad = os.path.join(folder, 'late.dcf')

@@ -389,6 +389,59 @@ def test_import_dcf():
         env.alive()
 
 
+def test_scan_dcf():
+    """scan --as-dcf DIR (issue 41): one DCF fragment per configured device
+    found ([DeviceInfo], [DeviceComissioning] NodeID, Baudrate and
+    LSS_SerialNumber, 1018h; CRLF), for the integrator's tool; read back by
+    import-dcf they are the map scan --as-config prints."""
+    configured = [Slave(0xEC, 0x1234, 0x00010002, 0x1001, 5), Slave(0xEC, 0x1234, 0x00010002, 0x1002, 6),
+                  Slave(0xEC, 0x1234, 0x00010003, 0x80001003, 7)]
+    fresh = Slave(0xEC, 0x1234, 0x00010002, 0x1004)
+    with Env({'vcan0': configured + [fresh]}) as env:
+        ctl = Ctl(env)
+        folder = os.path.join(env.dir, 'dcf-out')
+        ctl.fails('usage', "Option '--as-dcf' needs a value", 'scan', '--as-dcf')
+        ctl.fails('usage', '--as-dcf does not go with --json', 'scan', '--as-dcf', folder, '--json')
+        ctl.fails('usage', '--as-config does not go with --as-dcf', 'scan', '--as-config', '--as-dcf', folder)
+        ctl.fails('usage', "Option --as-dcf does not go with 'list'", 'list', '--as-dcf', folder)
+        for _ in range(2):  # the second time over the files of the first
+            r = ctl.ok('scan', '--as-dcf', folder, '--vendor', '0xEC', '--product', '0x1234')
+            env.step('lssctl scan --as-dcf:\n' + r.out)
+            names = ['vcan0-node%03d.dcf' % s.node_id for s in configured]
+            expect_eq(sorted(os.listdir(folder)), names, 'the files written')
+            for s in configured:
+                expect(('vcan0: device %s at node-ID %d: %s/vcan0-node%03d.dcf' % (ident8(s), s.node_id, folder,
+                                                                                    s.node_id)) in r.out,
+                       'said: %r' % r.out)
+            expect('vcan0: device %s not written: non-configured (node-ID 255)' % ident8(fresh) in r.out,
+                   'the non-configured device: %r' % r.out)
+            expect(r.out.endswith('3 DCFs written to %s.\n' % folder), 'summary: %r' % r.out)
+        with open(os.path.join(folder, 'vcan0-node005.dcf'), 'rb') as f:
+            data = f.read()
+        expect(data.count(b'\r\n') == data.count(b'\n') > 40, 'CRLF line ends: %r' % data[:200])
+        text = data.decode().replace('\r\n', '\n')
+        for want in ('[DeviceInfo]\nVendorNumber=0x000000EC\nProductNumber=0x00001234\nRevisionNumber=0x00010002\n',
+                     '[DeviceComissioning]\nNodeID=5\nBaudrate=125\nLSS_SerialNumber=0x00001001\n',
+                     '[1018sub4]\nParameterName=Serial number\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\n'
+                     'ParameterValue=0x00001001\n', 'FileName=vcan0-node005.dcf\n', 'CreatedBy=lssctl '):
+            expect(want in text, 'vcan0-node005.dcf lacks %r:\n%s' % (want, text))
+
+        # read back: the map scan --as-config prints
+        r = ctl.ok('import-dcf', '--bus', 'vcan0', *sorted(glob.glob(os.path.join(folder, '*.dcf'))))
+        back = [x.strip().split('  #')[0].rstrip(',') for x in r.out.splitlines() if x.strip().startswith('{ vendor')]
+        printed = ctl.ok('scan', '--as-config', '--vendor', '0xEC', '--product', '0x1234').out
+        active = [x.strip().split('  #')[0].rstrip(',') for x in printed.splitlines() if x.strip().startswith('{ vendor')]
+        expect_eq(back, active, 'import-dcf of the written DCFs against scan --as-config')
+        expect_eq(back, [MAP_ENTRY % (s.identity + (s.node_id,)) for s in configured], 'the entries')
+        expect('bitrate = 125000;' in r.out, 'the bit rate back from Baudrate: %r' % r.out)
+
+        # a folder that cannot be made
+        blocker = os.path.join(env.dir, 'a-file')
+        open(blocker, 'w').close()
+        r = ctl('scan', '--as-dcf', os.path.join(blocker, 'sub'))
+        expect(r.rc == EXIT['failure'] and 'Failed to make the folder %s/sub' % blocker in r.err, 'unwritable: %r' % r)
+
+
 def test_scan_config():
     """scan --as-config (issue 18, commissioning): the bus as it is, printed as
     the buses of lssd.conf(5), passes lssd --check-config, and lssd started
@@ -1098,6 +1151,9 @@ def test_completion():
     expect_eq(complete(['lssctl', '']), sorted(['status', 'list', 'scan', 'assign', 'unassign', 'auto-assign',
                                                  'set-bitrate', 'reload', 'monitor', 'raw', 'import-dcf']), 'commands')
     expect_eq(complete(['lssctl', 'import-dcf', '--']), ['--bus'], 'import-dcf options')
+    expect('--as-dcf' in complete(['lssctl', 'scan', '--']), 'scan options')
+    expect_eq(complete(['lssctl', 'scan', '--as-dcf', os.path.join(SOURCE_ROOT, 'tests', 'unit', 'dc')]), [DCF_DATA],
+              'scan --as-dcf: folders')
     expect_eq(complete(['lssctl', 'import-dcf', os.path.join(DCF_DATA, 'lely-co-nmt-s')]), [LELY_SLAVE],
               'import-dcf: file names')
     expect_eq(complete(['lssctl', 'au']), ['auto-assign'], 'command prefix')
@@ -1151,6 +1207,7 @@ TESTS = {
     'scan': test_scan,
     'scan-config': test_scan_config,
     'import-dcf': test_import_dcf,
+    'scan-dcf': test_scan_dcf,
     'scan-two-buses': test_scan_two_buses,
     'assign': test_assign,
     'assign-taken': test_assign_taken,
