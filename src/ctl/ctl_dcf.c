@@ -35,9 +35,11 @@ static int compare_entries(const void *a, const void *b) {
         return (x->node_id > y->node_id) - (x->node_id < y->node_id);
 }
 
-/* "FILE:LINE (NodeName "X")" */
+/* "FILE:LINE (NodeName "X")"; the comment stays one line whatever the file's name */
 static void print_source(const dcf_map *m, size_t file, unsigned line, const char *node_name) {
-        printf("%s:%u", m->files[file].name, line);
+        for (const char *p = m->files[file].name; *p; p++)
+                putchar((unsigned char) *p < ' ' || *p == 0x7F ? '?' : *p);
+        printf(":%u", line);
         if (node_name)
                 printf(" (NodeName \"%s\")", node_name);
 }

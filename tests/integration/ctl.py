@@ -375,6 +375,12 @@ def test_import_dcf():
     expect_eq((r.rc, r.err), (0, ''), 'import-dcf of lely\'s pair: %r' % r)
     with Env({'vcan0': [LELY_DEVICE]}) as env:
         ctl = Ctl(env)
+        # a file name with a line break stays in its comment
+        odd = os.path.join(env.dir, 'odd\nname.dcf')
+        shutil.copy(LELY_SLAVE, odd)
+        odd_out = lssctl_alone('import-dcf', odd).out
+        expect('# %s:17' % odd.replace('\n', '?') in odd_out, 'the odd name: %r' % odd_out)
+        check_printed_map(env, odd_out)
         check_printed_map(env, r.out)
         env.config = r.out
         env.restart_lssd()
