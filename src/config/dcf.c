@@ -176,16 +176,16 @@ static void pass_error(pass *p, const char *format, ...) {
 
 /* Text from the file, quoted for a message: printable, bounded. */
 static const char *quote(const char *s, size_t n, char *buf, size_t size) {
-        size_t k = 0;
+        size_t k = 0, i = 0;
         buf[k++] = '"';
-        for (size_t i = 0; i < n && k + 8 < size; i++) {
+        for (; i < n && k + 8 < size; i++) {
                 unsigned char c = (unsigned char) s[i];
                 if (c < ' ' || c == 0x7F || c == '"' || c == '\\')
                         k += (size_t) snprintf(buf + k, size - k, "\\x%02x", c);
                 else
                         buf[k++] = (char) c;
         }
-        if (k + 8 >= size) {
+        if (i < n) {
                 memcpy(buf + k, "...", 3);
                 k += 3;
         }

@@ -36,25 +36,25 @@ static int expand(const char *name, const char *dir, size_t bus_index, size_t k,
         if (!full)
                 return -ENOMEM;
         glob_errno = 0;
-        int k2 = glob(full, GLOB_ERR | GLOB_MARK, on_glob_error, &g);
-        if (k2 == GLOB_NOMATCH) {
+        int globbed = glob(full, GLOB_ERR | GLOB_MARK, on_glob_error, &g);
+        if (globbed == GLOB_NOMATCH) {
                 if (!strpbrk(p->pattern, "*?["))
                         r = dcf_map_read_file(m, full, diag); /* says why it cannot be read */
                 else
                         lssconf_diag_add(diag, LSSCONF_DIAG_WARNING, "%s:%u: buses[%zu].dcf[%zu]: \"%s\" matches no "
                                          "file", name, p->line, bus_index, k, full);
-        } else if (k2 == GLOB_ABORTED)
+        } else if (globbed == GLOB_ABORTED)
                 lssconf_diag_add(diag, LSSCONF_DIAG_ERROR, "%s:%u: buses[%zu].dcf[%zu]: cannot read %s: %s", name,
                                  p->line, bus_index, k, glob_error_path, strerror(glob_errno ? glob_errno : EIO));
-        else if (k2 != 0)
+        else if (globbed != 0)
                 r = -ENOMEM;
-        for (size_t i = 0; k2 == 0 && i < g.gl_pathc && r != -ENOMEM; i++) {
+        for (size_t i = 0; globbed == 0 && i < g.gl_pathc && r != -ENOMEM; i++) {
                 const char *path = g.gl_pathv[i];
                 if (path[0] && path[strlen(path) - 1] == '/')
                         continue; /* a folder */
                 r = dcf_map_read_file(m, path, diag);
         }
-        if (k2 == 0)
+        if (globbed == 0)
                 globfree(&g);
         free(full);
         return r == -ENOMEM ? r : 0;

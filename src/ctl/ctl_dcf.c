@@ -44,15 +44,16 @@ static void print_source(const dcf_map *m, size_t file, unsigned line, const cha
                 printf(" (NodeName \"%s\")", node_name);
 }
 
-static void print_bus(const ctl_context *c, const dcf_map *m, uint32_t kbit) {
+static int print_bus(const ctl_context *c, const dcf_map *m, uint32_t kbit) {
         const dcf_entry **v = calloc(m->n_entries ? m->n_entries : 1, sizeof(*v));
         size_t n_dcf = 0;
+        if (!v)
+                return -ENOMEM;
         for (size_t i = 0; i < m->n_files; i++)
                 n_dcf += m->files[i].dcf;
-        for (size_t i = 0; v && i < m->n_entries; i++)
+        for (size_t i = 0; i < m->n_entries; i++)
                 v[i] = &m->entries[i];
-        if (v)
-                qsort(v, m->n_entries, sizeof(*v), compare_entries);
+        qsort(v, m->n_entries, sizeof(*v), compare_entries);
 
         printf("# lssd.conf(5) buses from CiA 306 DCFs by 'lssctl import-dcf', lssctl %s:\n", LSSCTL_VERSION);
         printf("# %zu device%s from %zu file%s", m->n_entries, m->n_entries == 1 ? "" : "s", n_dcf,
@@ -80,7 +81,7 @@ static void print_bus(const ctl_context *c, const dcf_map *m, uint32_t kbit) {
                 printf("    # bitrate = ...;  the DCFs do not say the bit rate (Baudrate): give it\n");
         printf("    auto_assign = true;   # at start, every device below gets its node-ID\n"
                "    devices = (\n");
-        for (size_t i = 0; v && i < m->n_entries; i++) {
+        for (size_t i = 0; i < m->n_entries; i++) {
                 const dcf_entry *e = v[i];
                 uint32_t id[4] = { e->identity.vendor, e->identity.product, e->identity.revision, e->identity.serial };
                 ctl_print_map_entry(id, e->has_revision, e->node_id, true, i + 1 < m->n_entries);
@@ -100,6 +101,7 @@ static void print_bus(const ctl_context *c, const dcf_map *m, uint32_t kbit) {
                "  }\n"
                ");\n");
         free(v);
+        return 0;
 }
 
 int verb_import_dcf(ctl_context *c) {
@@ -127,8 +129,9 @@ int verb_import_dcf(ctl_context *c) {
         else if (r < 0 || d.n_errors > 0)
                 r = ctl_fail(c, CTL_EXIT_BAD_CONFIG, -EINVAL, "%zu error%s in the DCFs (above): no map printed.",
                              d.n_errors, d.n_errors == 1 ? "" : "s");
+        else if (print_bus(c, &m, kbit) < 0)
+                r = ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
         else {
-                print_bus(c, &m, kbit);
                 if (m.n_entries == 0)
                         fprintf(stderr, "lssctl: warning: no device of these files can be a map entry.\n");
         }

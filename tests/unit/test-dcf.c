@@ -586,6 +586,19 @@ START_TEST(file_errors) {
         lssconf_diag d = LSSCONF_DIAG_INIT;
         dcf_map m;
         dcf_map_init(&m);
+
+        /* a long value is quoted bounded; one that just fits whole */
+#define LONG55 "012345678901234567890123456789012345678901234567890123z"
+        char text[200];
+        snprintf(text, sizeof(text), "[DeviceComissioning]\nNodeID=%0120d\n", 9);
+        text[28 + 16] = 'x'; /* after "[DeviceComissioning]\nNodeID=" and 16 zeros */
+        ck_assert_int_eq(read_text(&m, "q.dcf", text, &d), -EINVAL);
+        expect_message(&d, LSSCONF_DIAG_ERROR, "q.dcf:2: [DeviceComissioning] NodeID: \"0000000000000000x", "...\" is not");
+        lssconf_diag_clear(&d);
+        ck_assert_int_eq(read_text(&m, "q.dcf", "[DeviceComissioning]\nNodeID=" LONG55 "\n",
+                                   &d), -EINVAL);
+        expect_message(&d, LSSCONF_DIAG_ERROR, "NodeID: \"" LONG55 "\" is not"); /* as long as fits */
+        lssconf_diag_clear(&d);
         ck_assert_int_eq(dcf_map_read_buffer(&m, "[DeviceInfo]\n\0x", 15, "n.dcf", &d), -EINVAL);
         expect_message(&d, LSSCONF_DIAG_ERROR, "n.dcf:2: NUL byte, this is not a text file");
         lssconf_diag_clear(&d);
