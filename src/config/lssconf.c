@@ -53,6 +53,9 @@ lssconf *lssconf_free(lssconf *c) {
         for (size_t i = 0; i < c->n_buses; i++)
                 free(c->buses[i].devices);
         free(c->buses);
+        for (size_t i = 0; i < c->n_sources; i++)
+                free(c->sources[i]);
+        free(c->sources);
         free(c->source);
         free(c);
         return NULL;
@@ -80,6 +83,10 @@ const lssconf_device *lssconf_lookup_device(const lssconf_bus *b, const lss_iden
         return NULL;
 }
 
+const char *lssconf_device_source(const lssconf *c, const lssconf_device *d) {
+        return d->source > 0 && d->source <= c->n_sources ? c->sources[d->source - 1] : NULL;
+}
+
 const lssconf_device *lssconf_bus_find_node_id(const lssconf_bus *b, uint8_t node_id) {
         if (!b)
                 return NULL;
@@ -99,11 +106,18 @@ const char *lssconf_bus_describe(const lssconf_bus *b, char *buf, size_t size) {
         else
                 snprintf(unknown, sizeof(unknown), "ignore");
 
+        size_t from_dcf = 0;
+        char dcf[40] = "";
+        for (size_t i = 0; i < b->n_devices; i++)
+                from_dcf += b->devices[i].source > 0;
+        if (from_dcf > 0)
+                snprintf(dcf, sizeof(dcf), " (%zu from DCFs)", from_dcf);
+
         snprintf(buf, size,
-                 "%s: %" PRIu32 " bit/s, %zu mapped device%s, auto-assign %s, store %s, "
+                 "%s: %" PRIu32 " bit/s, %zu mapped device%s%s, auto-assign %s, store %s, "
                  "unknown devices: %s, nmt-stop %s, replace %s, reset after pass %s, bit-rate change %s, "
                  "LSS timeout %" PRIu32 " ms (%s)",
-                 b->interface, b->bitrate, b->n_devices, b->n_devices == 1 ? "" : "s",
+                 b->interface, b->bitrate, b->n_devices, b->n_devices == 1 ? "" : "s", dcf,
                  b->auto_assign ? "on" : "off", b->store ? "on" : "off", unknown,
                  b->nmt_stop ? "on" : "off", b->replace ? "on" : "off", b->reset_after_pass ? "on" : "off",
                  b->bitrate_change ? "allowed" : "off",

@@ -7,7 +7,10 @@
  *   lss_timeout_ms = 20;        # optional, 1..10000, default 20
  *   lss_timing = "adaptive";    # optional, "adaptive" (default) | "fixed"
  *   boot_ready_limit_s = 1800;  # optional, 1..86400, default 1800
- *   buses = ( { interface = "can0"; ... devices = ( { ... }, ... ); }, ... );
+ *   buses = ( { interface = "can0"; ... devices = ( { ... }, ... ); dcf = [ "GLOB", ... ]; }, ... );
+ *
+ * A bus's map is its `devices` and the entries of the CiA 306 DCFs its
+ * `dcf` patterns name (config/dcf.h), relative to the file's folder.
  *
  * Loading never prints and never exits: errors and warnings go to a
  * lssconf_diag list, each naming "file:line: what: problem". Warnings (unknown
@@ -45,7 +48,8 @@ typedef struct lssconf_device {
         lss_identity identity; /* vendor/product resolved from bus defaults if absent */
         bool has_revision;     /* false: identity.revision is 0 and matches any revision */
         uint8_t node_id;       /* 1..127 */
-        unsigned line;         /* line of the entry in the file, for log messages */
+        unsigned line;         /* line of the entry in its file, for log messages */
+        size_t source;         /* 0: the configuration file; n: lssconf.sources[n - 1], a DCF */
 } lssconf_device;
 
 typedef struct lssconf_bus {
@@ -64,7 +68,7 @@ typedef struct lssconf_bus {
         uint8_t pool_lo, pool_hi;    /* 1..127, lo <= hi; 0/0 when no pool given */
         bool has_vendor, has_product;
         uint32_t vendor, product;    /* bus defaults for the entries (informational once resolved) */
-        lssconf_device *devices;
+        lssconf_device *devices;     /* the entries of `devices`, then those of the DCFs of `dcf` */
         size_t n_devices;
         unsigned line;               /* line of the bus group, 0 if not from a file */
 } lssconf_bus;
@@ -76,6 +80,8 @@ typedef struct lssconf {
         uint32_t boot_ready_limit_s; /* 1..LSSCONF_BOOT_READY_LIMIT_S_MAX */
         lssconf_bus *buses;
         size_t n_buses;
+        char **sources;              /* the DCFs map entries came from */
+        size_t n_sources;
 } lssconf;
 
 /* Loads and validates a configuration file. Returns 0 and a new config in
@@ -86,7 +92,9 @@ typedef struct lssconf {
  * diag may be NULL (messages are then discarded); messages are appended. */
 int lssconf_load_file(const char *path, lssconf **ret, lssconf_diag *diag);
 
-/* Same for text in memory (tests, fuzzing). name is used in messages. */
+/* Same for text in memory (tests, fuzzing). name is used in messages. It
+ * reads no file: a bus's `dcf` patterns are checked but not expanded (a
+ * warning says so). */
 int lssconf_load_buffer(const char *text, size_t len, const char *name,
                             lssconf **ret, lssconf_diag *diag);
 
@@ -109,12 +117,15 @@ const lssconf_device *lssconf_lookup_device(const lssconf_bus *b, const lss_iden
 /* one map entry against an identity: lss_identity_matches() on the entry */
 bool lssconf_device_matches(const lssconf_device *d, const lss_identity *id);
 
+/* The DCF an entry came from, NULL for the configuration file itself. */
+const char *lssconf_device_source(const lssconf *c, const lssconf_device *d);
+
 /* The entry mapped to node_id, NULL if none. */
 const lssconf_device *lssconf_bus_find_node_id(const lssconf_bus *b, uint8_t node_id);
 
 /* One line for the daemon log, e.g. "can0: 250000 bit/s, 3 mapped devices,
  * auto-assign, store, unknown devices: pool 100..110, ...". Returns buf. */
-#define LSSCONF_BUS_DESCRIBE_MAX 256u
+#define LSSCONF_BUS_DESCRIBE_MAX 320u
 const char *lssconf_bus_describe(const lssconf_bus *b, char *buf, size_t size);
 
 /* Linux rules: 1..15 bytes, not "." or "..", no '/', ':', whitespace or

@@ -131,25 +131,32 @@ static void check_node_ids(const char *name, size_t bus_index, const lssconf_bus
         }
 }
 
-static void check_pool(const char *name, size_t bus_index, const lssconf_bus *b,
-                       const lssconf_bus_src *src, lssconf_diag *diag) {
-        if (b->unknown != LSSCONF_UNKNOWN_POOL || !src->pool_ok)
-                return;
-        for (size_t i = 0; i < b->n_devices; i++) {
-                uint8_t nid = b->devices[i].node_id;
-                if (!src->devices[i].ok || nid < b->pool_lo || nid > b->pool_hi)
-                        continue;
-                lssconf_diag_add(diag, LSSCONF_DIAG_ERROR,
-                              "%s:%u: buses[%zu].pool: %u..%u contains node-ID %u mapped to devices[%zu] at line %u",
-                              name, src->pool_line, bus_index, b->pool_lo, b->pool_hi, nid, i, b->devices[i].line);
-        }
-}
-
 int lssconf_check_bus(const char *name, size_t bus_index, const lssconf_bus *b,
                           const lssconf_bus_src *src, lssconf_diag *diag) {
         check_node_ids(name, bus_index, b, src, diag);
-        check_pool(name, bus_index, b, src, diag);
+        lssconf_check_pool(name, bus_index, b, src, 0, NULL, diag);
         return check_identities(name, bus_index, b, src, diag);
+}
+
+void lssconf_check_pool(const char *name, size_t bus_index, const lssconf_bus *b, const lssconf_bus_src *src,
+                        size_t from, const lssconf *c, lssconf_diag *diag) {
+        if (b->unknown != LSSCONF_UNKNOWN_POOL || !src->pool_ok)
+                return;
+        for (size_t i = from; i < b->n_devices; i++) {
+                const lssconf_device *d = &b->devices[i];
+                const char *dcf = c ? lssconf_device_source(c, d) : NULL;
+                if (!src->devices[i].ok || d->node_id < b->pool_lo || d->node_id > b->pool_hi)
+                        continue;
+                if (dcf)
+                        lssconf_diag_add(diag, LSSCONF_DIAG_ERROR,
+                                         "%s:%u: buses[%zu].pool: %u..%u contains node-ID %u mapped by %s:%u", name,
+                                         src->pool_line, bus_index, b->pool_lo, b->pool_hi, d->node_id, dcf, d->line);
+                else
+                        lssconf_diag_add(diag, LSSCONF_DIAG_ERROR,
+                                         "%s:%u: buses[%zu].pool: %u..%u contains node-ID %u mapped to devices[%zu] at "
+                                         "line %u", name, src->pool_line, bus_index, b->pool_lo, b->pool_hi,
+                                         d->node_id, i, d->line);
+        }
 }
 
 typedef struct interface_key {

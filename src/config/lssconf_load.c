@@ -3,20 +3,21 @@
  * plain structs, checking every key's type and range on the way. It keeps
  * going after an error so that one run reports every problem. */
 #include <errno.h>
-#include <fcntl.h>
 #include <inttypes.h>
 #include <libconfig.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "config/lssconf.h"
 #include "config/lssconf_check.h"
+#include "config/lssconf_dcf.h"
 #include "config/lssconf_prescan.h"
+#include "config/lssconf_read.h"
 
 typedef struct loader {
         const char *name;
+        const char *dir;  /* the file's folder, for relative `dcf` patterns; NULL: no file is read */
         lssconf_diag *diag;
         int oom; /* -ENOMEM once an allocation failed */
 } loader;
@@ -24,7 +25,7 @@ typedef struct loader {
 static const char *const root_keys[] = { "lss_timeout_ms", "lss_timing", "boot_ready_limit_s", "buses", NULL };
 static const char *const bus_keys[] = {
         "interface", "bitrate", "auto_assign", "store", "unknown", "pool", "nmt_stop", "replace", "reset_after_pass",
-        "lss_timeout_ms", "lss_timing", "vendor", "product", "bitrate_change", "devices", NULL
+        "lss_timeout_ms", "lss_timing", "vendor", "product", "bitrate_change", "devices", "dcf", NULL
 };
 static const char *const device_keys[] = { "vendor", "product", "revision", "serial", "node_id", NULL };
 
@@ -321,6 +322,39 @@ static void parse_devices(loader *l, const config_setting_t *list, const bus_def
                 parse_device(l, config_setting_get_elem(list, (unsigned) i), def, &b->devices[i], &src->devices[i]);
 }
 
+/* ---- DCFs ---- */
+
+/* dcf = [ "GLOB", ... ] (or one string): the patterns, read after the bus's checks */
+static void parse_dcf(loader *l, const config_setting_t *s, lssconf_bus_src *src) {
+        bool one = config_setting_type(s) == CONFIG_TYPE_STRING;
+        src->dcf_line = setting_line(s);
+        if (!one && config_setting_type(s) != CONFIG_TYPE_ARRAY && config_setting_type(s) != CONFIG_TYPE_LIST) {
+                error_at(l, s, "expected [ \"GLOB\", ... ], got %s", type_name(s));
+                return;
+        }
+        size_t n = one ? 1 : (size_t) config_setting_length(s);
+        if (n == 0)
+                return;
+        src->dcf = calloc(n, sizeof(*src->dcf));
+        if (!src->dcf) {
+                l->oom = -ENOMEM;
+                return;
+        }
+        for (size_t i = 0; i < n; i++) {
+                const config_setting_t *e = one ? s : config_setting_get_elem(s, (unsigned) i);
+                if (config_setting_type(e) != CONFIG_TYPE_STRING) {
+                        error_at(l, e, "expected a file name pattern \"GLOB\", got %s", type_name(e));
+                        continue;
+                }
+                const char *v = config_setting_get_string(e);
+                if (!*v) {
+                        error_at(l, e, "an empty pattern names no file");
+                        continue;
+                }
+                src->dcf[src->n_dcf++] = (lssconf_dcf_pattern) { .pattern = v, .line = setting_line(e) };
+        }
+}
+
 /* ---- buses ---- */
 
 static void parse_pool(loader *l, const config_setting_t *s, lssconf_bus *b, lssconf_bus_src *src) {
@@ -467,6 +501,9 @@ static void parse_bus(loader *l, const config_setting_t *g, const lssconf *c,
         s = config_setting_get_member(g, "devices");
         if (s)
                 parse_devices(l, s, &def, b, src);
+        s = config_setting_get_member(g, "dcf");
+        if (s)
+                parse_dcf(l, s, src);
 }
 
 static void parse_root(loader *l, const config_setting_t *root, lssconf *c, lssconf_bus_src **ret_src) {
@@ -508,7 +545,8 @@ static void parse_root(loader *l, const config_setting_t *root, lssconf *c, lssc
                 parse_bus(l, config_setting_get_elem(buses, (unsigned) i), c, &c->buses[i], &src[i]);
                 if (l->oom < 0)
                         return;
-                if (lssconf_check_bus(l->name, i, &c->buses[i], &src[i], l->diag) < 0)
+                if (lssconf_check_bus(l->name, i, &c->buses[i], &src[i], l->diag) < 0 ||
+                    lssconf_read_bus_dcfs(l->name, l->dir, i, c, &c->buses[i], &src[i], l->diag) < 0)
                         l->oom = -ENOMEM;
         }
         if (lssconf_check_interfaces(l->name, c, src, l->diag) < 0)
@@ -559,19 +597,22 @@ static int load_tree(loader *l, const char *text, unsigned open_comment_line, ls
         }
 
 finish:
-        for (size_t i = 0; i < n_src; i++)
+        for (size_t i = 0; i < n_src; i++) {
                 free(src[i].devices);
+                free(src[i].dcf);
+        }
         free(src);
         lssconf_free(c);
         config_destroy(&cfg);
         return r;
 }
 
-int lssconf_load_buffer(const char *text, size_t len, const char *name,
-                            lssconf **ret, lssconf_diag *diag) {
+static int load_text(const char *text, size_t len, const char *name, const char *dir, lssconf **ret,
+                     lssconf_diag *diag) {
         lssconf_diag local = LSSCONF_DIAG_INIT;
         loader l = {
                 .name = name ? name : "(config)",
+                .dir = dir,
                 .diag = diag ? diag : &local,
         };
         unsigned open_comment_line = 0;
@@ -586,48 +627,9 @@ int lssconf_load_buffer(const char *text, size_t len, const char *name,
         return r;
 }
 
-/* Reads at most LSSCONF_SIZE_MAX bytes; -EFBIG if there is more. */
-static int read_all(int fd, char **ret, size_t *ret_len) {
-        size_t len = 0, allocated = 0;
-        char *buf = NULL;
-
-        for (;;) {
-                if (len == allocated) {
-                        if (allocated > LSSCONF_SIZE_MAX) {
-                                free(buf);
-                                return -EFBIG;
-                        }
-                        /* one byte over the limit tells "too big" from "exactly the limit" */
-                        size_t n = allocated ? allocated * 2 : 16384;
-                        if (n > LSSCONF_SIZE_MAX)
-                                n = LSSCONF_SIZE_MAX + 1;
-                        char *b = realloc(buf, n);
-                        if (!b) {
-                                free(buf);
-                                return -ENOMEM;
-                        }
-                        buf = b;
-                        allocated = n;
-                }
-                ssize_t k = read(fd, buf + len, allocated - len);
-                if (k < 0) {
-                        if (errno == EINTR)
-                                continue;
-                        int e = -errno;
-                        free(buf);
-                        return e;
-                }
-                if (k == 0)
-                        break;
-                len += (size_t) k;
-        }
-        if (len > LSSCONF_SIZE_MAX) {
-                free(buf);
-                return -EFBIG;
-        }
-        *ret = buf;
-        *ret_len = len;
-        return 0;
+int lssconf_load_buffer(const char *text, size_t len, const char *name,
+                            lssconf **ret, lssconf_diag *diag) {
+        return load_text(text, len, name, NULL, ret, diag);
 }
 
 int lssconf_load_file(const char *path, lssconf **ret, lssconf_diag *diag) {
@@ -635,28 +637,17 @@ int lssconf_load_file(const char *path, lssconf **ret, lssconf_diag *diag) {
         lssconf_diag *d = diag ? diag : &local;
         char *text = NULL;
         size_t len = 0;
-        int r;
 
         *ret = NULL;
-        int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY);
-        if (fd < 0) {
-                r = -errno;
-                lssconf_diag_add(d, LSSCONF_DIAG_ERROR, "%s: cannot open: %s", path, strerror(-r));
-                goto finish;
-        }
-        r = read_all(fd, &text, &len);
-        close(fd);
-        if (r == -EFBIG)
-                lssconf_diag_add(d, LSSCONF_DIAG_ERROR, "%s: larger than %u bytes, refusing to read it",
-                              path, LSSCONF_SIZE_MAX);
-        else if (r < 0 && r != -ENOMEM)
-                lssconf_diag_add(d, LSSCONF_DIAG_ERROR, "%s: cannot read: %s", path, strerror(-r));
-        if (r < 0)
-                goto finish;
-
-        r = lssconf_load_buffer(text, len, path, ret, d);
-
-finish:
+        int r = lssconf_read_text(path, LSSCONF_SIZE_MAX, &text, &len, d);
+        /* relative `dcf` patterns are the file's neighbours */
+        const char *slash = strrchr(path, '/');
+        char *dir = slash ? strndup(path, slash == path ? 1 : (size_t) (slash - path)) : strdup(".");
+        if (r >= 0 && !dir)
+                r = -ENOMEM;
+        if (r >= 0)
+                r = load_text(text, len, path, dir, ret, d);
+        free(dir);
         free(text);
         lssconf_diag_clear(&local);
         return r;

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "config/lssconf_prescan.h"
+#include "config/lssconf_read.h"
 
 typedef struct scan {
         const char *text;
@@ -238,14 +239,8 @@ int lssconf_prescan(const char *text, size_t len, const char *name, lssconf_diag
                 .line = 1,
         };
 
-        const char *nul = memchr(text, '\0', len);
-        if (nul) {
-                unsigned line = 1;
-                for (const char *q = text; q < nul; q++)
-                        line += *q == '\n';
-                lssconf_diag_add(diag, LSSCONF_DIAG_ERROR, "%s:%u: NUL byte, this is not a text file", name, line);
+        if (lssconf_text_check(text, len, name, diag) < 0)
                 return -EINVAL;
-        }
 
         for (size_t i = 0; i < len && !s.oom; )
                 i = scan_token(&s, i);

@@ -24,6 +24,7 @@ typedef struct ctl_context {
         bool dry_run;               /* auto-assign: discovery only */
         bool reset;                 /* unassign: reset the device and check it runs non-configured */
         bool as_config;             /* scan: print the found devices as lssd.conf(5) buses */
+        const char *as_dcf;         /* scan: write a DCF fragment per device found into this folder */
         bool global;                /* set-bitrate: SetBitrate option global */
         bool no_sdo;                /* scan: LSS only, no SDO discovery (Scan option sdo false) */
         bool has_delay;
@@ -77,3 +78,4 @@ int verb_set_bitrate(ctl_context *c);
 int verb_reload(ctl_context *c);
 int verb_monitor(ctl_context *c);
 int verb_raw(ctl_context *c);
+int verb_import_dcf(ctl_context *c);

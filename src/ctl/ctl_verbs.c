@@ -8,6 +8,7 @@
 #include <time.h>
 
 #include "ctl/ctl.h"
+#include "ctl/ctl_dcf.h"
 #include "ctl/ctl_errors.h"
 #include "ctl/ctl_job.h"
 #include "ctl/ctl_json.h"
@@ -380,33 +381,50 @@ static int compare_by_node_id(const void *a, const void *b) {
         return memcmp(x->id, y->id, sizeof(x->id));
 }
 
-/* The found devices as the buses list of lssd.conf(5): each configured
- * device a map entry at its node-ID, and the map's devices not found at
- * theirs; what cannot be one commented out. */
-static int print_config(ctl_context *c, const results *res, char **paths, char **ifnames, size_t n) {
-        const found **v = calloc(res->n ? res->n : 1, sizeof(*v));
-        size_t mapped = 0, kept = 0, waiting = 0, left_out = 0, moved = 0;
-        char when[64] = "";
-        time_t now = time(NULL);
-        struct tm tm;
-
-        if (!v)
-                return ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
-        /* a device found is mapped when its node-ID is 1..127 and no other
-         * device found on its bus has it; one kept from the map when no
-         * device found has its node-ID */
+/* Which devices can be map entries (calloc'ed, NULL when out of memory):
+ * a device found is when its node-ID is 1..127, it answers LSS and no
+ * other device found on its bus has that node-ID; one kept from the map
+ * when no device found has its node-ID. */
+static bool *mappable(const results *res) {
         bool *ok = calloc(res->n ? res->n : 1, sizeof(*ok));
-        if (!ok) {
-                free(v);
-                return ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
-        }
-        for (size_t i = 0; i < res->n; i++) {
+        for (size_t i = 0; ok && i < res->n; i++) {
                 const found *f = &res->v[i];
                 ok[i] = f->new_id >= 1 && f->new_id <= 127 && !sdo_only(f);
                 for (size_t k = 0; k < res->n && ok[i]; k++)
                         if (k != i && res->v[k].new_id == f->new_id && strcmp(res->v[k].ifname, f->ifname) == 0 &&
                             (f->kept || !res->v[k].kept))
                                 ok[i] = false;
+        }
+        return ok;
+}
+
+/* The bus's Bitrate as lssd publishes it, 0 when it does not say a CiA 301 one. */
+static uint32_t bus_bitrate(ctl_context *c, const char *path) {
+        uint32_t bitrate = 0;
+        if (sd_bus_get_property_trivial(c->bus, LSSD_BUS_NAME, path, LSSD_BUS_IFACE, "Bitrate", NULL, 'u', &bitrate) < 0 ||
+            lss_bit_timing_index(bitrate) < 0)
+                return 0;
+        return bitrate;
+}
+
+/* The found devices as the buses list of lssd.conf(5): each configured
+ * device a map entry at its node-ID, and the map's devices not found at
+ * theirs; what cannot be one commented out. */
+static int print_config(ctl_context *c, const results *res, char **paths, char **ifnames, size_t n) {
+        const found **v = calloc(res->n ? res->n : 1, sizeof(*v));
+        bool *ok = mappable(res);
+        size_t mapped = 0, kept = 0, waiting = 0, left_out = 0, moved = 0;
+        char when[64] = "";
+        time_t now = time(NULL);
+        struct tm tm;
+
+        if (!v || !ok) {
+                free(v);
+                free(ok);
+                return ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
+        }
+        for (size_t i = 0; i < res->n; i++) {
+                const found *f = &res->v[i];
                 mapped += ok[i] && !f->kept;
                 kept += ok[i] && f->kept && !f->non_configured;
                 waiting += ok[i] && f->non_configured;
@@ -440,7 +458,7 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
                "buses = (\n");
         for (size_t b = 0; b < n; b++) {
                 size_t nv = 0, last = SIZE_MAX;
-                uint32_t bitrate = 0;
+                uint32_t bitrate = bus_bitrate(c, paths[b]);
 
                 for (size_t i = 0; i < res->n; i++)
                         if (strcmp(res->v[i].ifname, ifnames[b]) == 0)
@@ -451,9 +469,7 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
                                 last = i;
 
                 printf("  {\n    interface = \"%s\";\n", ifnames[b]);
-                if (sd_bus_get_property_trivial(c->bus, LSSD_BUS_NAME, paths[b], LSSD_BUS_IFACE, "Bitrate", NULL, 'u',
-                                                &bitrate) >= 0 &&
-                    lss_bit_timing_index(bitrate) >= 0)
+                if (bitrate > 0)
                         printf("    bitrate = %" PRIu32 ";\n", bitrate);
                 else
                         printf("    # bitrate = ...;  lssd did not say this bus's bit rate: give it\n");
@@ -501,6 +517,56 @@ static int print_config(ctl_context *c, const results *res, char **paths, char *
         free(ok);
         free(v);
         return 0;
+}
+
+/* scan --as-dcf: a DCF fragment for each device --as-config would map at
+ * its node-ID; the others found are named, with why not. */
+static int write_dcfs(ctl_context *c, const results *res, char **paths, char **ifnames, size_t n) {
+        ctl_dcf_device *v = calloc(res->n ? res->n : 1, sizeof(*v));
+        uint32_t *bitrate = calloc(n ? n : 1, sizeof(*bitrate));
+        bool *ok = mappable(res);
+        size_t k = 0;
+        int r = 0;
+
+        if (!v || !bitrate || !ok) {
+                r = ctl_fail(c, CTL_EXIT_FAILURE, -ENOMEM, "Out of memory.");
+                goto finish;
+        }
+        for (size_t b = 0; b < n; b++)
+                bitrate[b] = bus_bitrate(c, paths[b]);
+        for (size_t b = 0; b < n; b++)
+                for (uint8_t node = 1; node <= 127; node++)
+                        for (size_t i = 0; i < res->n; i++) {
+                                const found *f = &res->v[i];
+                                if (!ok[i] || f->kept || f->new_id != node || strcmp(f->ifname, ifnames[b]) != 0)
+                                        continue;
+                                v[k++] = (ctl_dcf_device) { f->ifname, { f->id[0], f->id[1], f->id[2], f->id[3] },
+                                                            f->new_id, bitrate[b] };
+                        }
+        r = ctl_write_dcfs(c, c->as_dcf, v, k);
+        if (r < 0)
+                goto finish;
+        for (size_t i = 0; i < res->n; i++) {
+                const found *f = &res->v[i];
+                if (ok[i] || f->kept)
+                        continue;
+                printf("%s: device 0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 ":0x%08" PRIx32 " not written: ",
+                       f->ifname, f->id[0], f->id[1], f->id[2], f->id[3]);
+                if (sdo_only(f))
+                        printf("found by SDO only, it does not answer LSS\n");
+                else if (f->new_id == 0xFF)
+                        printf("non-configured (node-ID 255)\n");
+                else if (f->new_id >= 1 && f->new_id <= 127)
+                        printf("node-ID %u is answered by two devices\n", f->new_id);
+                else
+                        printf("node-ID %u is not 1..127\n", f->new_id);
+        }
+        printf("%zu DCF%s written to %s.\n", k, k == 1 ? "" : "s", c->as_dcf);
+finish:
+        free(ok);
+        free(bitrate);
+        free(v);
+        return r;
 }
 
 /* scan and auto-assign: the same shape, on every bus (or the --bus one) */
@@ -595,6 +661,8 @@ static int scan_like(ctl_context *c, bool assign) {
                 goto finish;
         if (c->as_config)
                 r = print_config(c, &res, paths, ifnames, n);
+        else if (c->as_dcf)
+                r = write_dcfs(c, &res, paths, ifnames, n);
         else
                 print_results(c, &res, assign);
         if (r < 0)

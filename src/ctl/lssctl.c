@@ -30,6 +30,8 @@ enum {
         OPT_AS_CONFIG = 1 << 13,
         OPT_NO_SDO = 1 << 14,
         OPT_GLOBAL = 1 << 15,
+        OPT_AS_DCF = 1 << 16,
+        OPT_LAST = OPT_AS_DCF,
 };
 
 typedef struct verb {
@@ -43,7 +45,8 @@ typedef struct verb {
 static const verb verbs[] = {
         { "status", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER, true, verb_status },
         { "list", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND, true, verb_list },
-        { "scan", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR | OPT_AS_CONFIG | OPT_NO_SDO,
+        { "scan", 0, 0,
+          OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR | OPT_AS_CONFIG | OPT_NO_SDO | OPT_AS_DCF,
           false, verb_scan },
         { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false,
           verb_assign },
@@ -57,6 +60,7 @@ static const verb verbs[] = {
         { "reload", 0, 0, OPT_QUIET, false, verb_reload },
         { "monitor", 0, 0, OPT_BUS | OPT_JSON, false, verb_monitor },
         { "raw", 1, -1, OPT_BUS | OPT_JSON, false, verb_raw },
+        { "import-dcf", 1, -1, OPT_BUS, false, verb_import_dcf },
 };
 
 static void help(void) {
@@ -74,11 +78,13 @@ static void help(void) {
                "  set-bitrate BITRATE      Switch every slave and the interface to BITRATE\n"
                "  reload                   Make lssd read its configuration again\n"
                "  monitor                  Show signals and property changes until ^C\n"
-               "  raw SERVICE [ARGS]...    Run raw LSS services while holding the bus\n\n"
+               "  raw SERVICE [ARGS]...    Run raw LSS services while holding the bus\n"
+               "  import-dcf FILE...       Print the map of CiA 306 DCFs as the buses of lssd.conf(5)\n"
+               "                           (no lssd needed)\n\n"
                "Options:\n"
                "  -h --help                Show this help\n"
                "     --version             Show the version\n"
-               "  -b --bus IFACE           Act on this CAN interface only\n"
+               "  -b --bus IFACE           Act on this CAN interface only (import-dcf: the bus printed)\n"
                "     --json                JSON output (status, list, scan, assign, unassign, auto-assign, monitor,\n"
                "                           raw)\n"
                "     --no-pager            Do not pipe output into a pager\n"
@@ -98,6 +104,7 @@ static void help(void) {
                "     --vendor ID --product ID\n"
                "                           Also look for configured slaves of this pair (scan)\n"
                "     --as-config           Print what scan found as the buses of lssd.conf(5), a map\n"
+               "     --as-dcf DIR          scan: write a CiA 306 DCF fragment per configured device found into DIR\n"
                "     --no-sdo              scan: LSS only, do not ask every node-ID for its identity by SDO\n\n"
                "See the lssctl(1) man page for details and the exit codes.\n");
 }
@@ -119,6 +126,7 @@ enum {
         ARG_AS_CONFIG,
         ARG_NO_SDO,
         ARG_GLOBAL,
+        ARG_AS_DCF,
 };
 
 static const char *option_name(unsigned flag) {
@@ -139,6 +147,7 @@ static const char *option_name(unsigned flag) {
         case OPT_AS_CONFIG: return "--as-config";
         case OPT_NO_SDO: return "--no-sdo";
         case OPT_GLOBAL: return "--global";
+        case OPT_AS_DCF: return "--as-dcf";
         default: return "?";
         }
 }
@@ -171,6 +180,7 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 { "dry-run", no_argument, NULL, ARG_DRY_RUN },
                 { "reset", no_argument, NULL, ARG_RESET },
                 { "as-config", no_argument, NULL, ARG_AS_CONFIG },
+                { "as-dcf", required_argument, NULL, ARG_AS_DCF },
                 { "no-sdo", no_argument, NULL, ARG_NO_SDO },
                 { "global", no_argument, NULL, ARG_GLOBAL },
                 { "quiet", no_argument, NULL, 'q' },
@@ -260,6 +270,12 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                         c->as_config = true;
                         *given |= OPT_AS_CONFIG;
                         break;
+                case ARG_AS_DCF:
+                        if (!*optarg)
+                                return ctl_usage(c, "--as-dcf needs a folder.");
+                        c->as_dcf = optarg;
+                        *given |= OPT_AS_DCF;
+                        break;
                 case 'q':
                         c->quiet = true;
                         *given |= OPT_QUIET;
@@ -346,14 +362,18 @@ int main(int argc, char *argv[]) {
                                            : ctl_usage(&c, "Too many arguments for '%s'.", v->name);
                 goto finish;
         }
-        for (unsigned flag = 1; flag <= OPT_AS_CONFIG; flag <<= 1)
+        for (unsigned flag = 1; flag <= OPT_LAST; flag <<= 1)
                 if ((given & flag) && !(v->options & flag)) {
                         r = ctl_usage(&c, "Option %s does not go with '%s'.", option_name(flag), v->name);
                         goto finish;
                 }
-        if (c.as_config && (c.json || c.no_legend)) {
+        if (c.as_config && (c.json || c.no_legend || c.as_dcf)) {
                 r = ctl_usage(&c, "--as-config does not go with %s: it prints lssd.conf(5) text.",
-                              c.json ? "--json" : "--no-legend");
+                              c.json ? "--json" : c.no_legend ? "--no-legend" : "--as-dcf");
+                goto finish;
+        }
+        if (c.as_dcf && (c.json || c.no_legend)) {
+                r = ctl_usage(&c, "--as-dcf does not go with %s: it writes files.", c.json ? "--json" : "--no-legend");
                 goto finish;
         }
         if (c.has_vendor != c.has_product) {

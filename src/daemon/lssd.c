@@ -198,12 +198,18 @@ static int check_config(lssd_context *ctx) {
                 printf("%s\n", lssconf_bus_describe(b, desc, sizeof(desc)));
                 for (size_t k = 0; k < b->n_devices; k++) {
                         const lssconf_device *d = &b->devices[k];
+                        const char *dcf = lssconf_device_source(c, d);
                         char rev[16] = "any";
                         if (d->has_revision)
                                 snprintf(rev, sizeof(rev), "0x%08" PRIx32, d->identity.revision);
-                        printf("  line %u: vendor 0x%08" PRIx32 " product 0x%08" PRIx32 " revision %s serial 0x%08"
-                               PRIx32 " -> node-ID %u\n", d->line, d->identity.vendor, d->identity.product, rev,
-                               d->identity.serial, d->node_id);
+                        /* an entry of a DCF names its file, one of the configuration its line */
+                        if (dcf)
+                                printf("  %s:%u: ", dcf, d->line);
+                        else
+                                printf("  line %u: ", d->line);
+                        printf("vendor 0x%08" PRIx32 " product 0x%08" PRIx32 " revision %s serial 0x%08" PRIx32
+                               " -> node-ID %u\n", d->identity.vendor, d->identity.product, rev, d->identity.serial,
+                               d->node_id);
                 }
         }
         printf("Configuration %s is good: %zu bus%s.\n", c->source ? c->source : "(command line)", c->n_buses,

@@ -7,8 +7,11 @@ lssd is started with the unit's ExecStart line and NOTIFY_SOCKET pointing at a
 datagram socket the test reads; lss-sim's state files and candump are the
 witnesses of what happened on the bus."""
 
+import glob
 import os
 import random
+import re
+import shutil
 import signal
 import socket
 import struct
@@ -17,7 +20,8 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from lssdtest import (BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, SERVICE, Env, Skip, Slave, auto_assign,  # noqa: E402
+from lssdtest import (BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, SERVICE, SOURCE_ROOT, Env, Skip, Slave,  # noqa: E402
+                      auto_assign,
                       bus_path, device_path, log, run, unit_exec_start)
 
 B0 = bus_path('vcan0')
@@ -642,6 +646,155 @@ def test_bad_config():
         env.alive()
 
 
+# ---- the map from the integrator's DCFs (issue 41) ----
+
+# the DCFs of public CANopen projects of the reader's unit tests
+DCF_DATA = os.path.join(SOURCE_ROOT, 'tests', 'unit', 'dcf')
+# lely-core's NMT slave: its DCF and its master's put it at node-ID 2
+DCF_LELY = Slave(0x360, 2, 3, 4)
+DCF_LEFT = Slave(0xEC, 0x1234, 0x10002, 0x1001)       # drive-left.dcf, and master.dcf: node-ID 10
+DCF_RIGHT = Slave(0xEC, 0x1234, 0x10002, 0x1002, 50)  # drive-right.dcf: NodeID=013 (octal: 11); at 50 now
+DCF_IO12 = Slave(0x9A, 3, 0x20001, 0x3012)            # master.dcf alone: node-ID 12, its revision
+DCF_IO13 = Slave(0x9A, 3, 0x20002, 0x3013)            # master.dcf alone: node-ID 13, any revision (1F87h 0)
+DCF_CONF = Slave(0xEC, 0x1234, 0x10002, 0x2001)       # lssd.conf's own devices list: node-ID 20
+DCF_SPARE = Slave(0xEC, 0x1234, 0x10002, 0x1099)      # spare.dcf says NodeID 255: left out, stays
+DCF_SLAVES = [DCF_LELY, DCF_LEFT, DCF_RIGHT, DCF_IO12, DCF_IO13, DCF_CONF, DCF_SPARE]
+DCF_MAP = {DCF_LELY.serial: 2, DCF_LEFT.serial: 10, DCF_RIGHT.serial: 11, DCF_IO12.serial: 12, DCF_IO13.serial: 13,
+           DCF_CONF.serial: 20}
+
+
+def dcf_files():
+    """The integrator's DCFs of the test's network, as their tools write them."""
+    left = ('\ufeff[FileInfo]\nFileName=drive-left.dcf\nCreatedBy=the integrator\n\n'
+            '[DeviceInfo]\nVendorName=Example\nVendorNumber=0x000000EC\nProductNumber=0x00001234\n'
+            'RevisionNumber=0x00010002\nLSS_Supported=1\n\n'
+            '[DeviceComissioning]\nNodeID=0x0A\nNodeName=left drive\nBaudrate=125\nNetNumber=1\n'
+            'LSS_SerialNumber=0x00001001\n\n'
+            '[1018]\nSubNumber=5\nObjectType=0x9\n\n[1018sub1]\nDataType=0x0007\nParameterValue=0x000000EC\n\n'
+            '[1400sub1]\nDefaultValue=$NODEID+0x200\n').replace('\n', '\r\n')
+    right = ('[DeviceInfo]\nVendorName=Example\n\n'
+             '[DeviceComissioning]\nNodeID=013\nNodeName=right drive\nBaudrate=125\nNetNumber=1\n'
+             'LSS_SerialNumber=0\n\n'
+             '[1018sub1]\nDefaultValue=0xEC\n[1018sub2]\nDefaultValue=4660\n[1018sub3]\nDefaultValue=0x00010002\n'
+             '[1018sub4]\nDefaultValue=0\nParameterValue=0x00001002\n')
+    master = ('[DeviceInfo]\nVendorName=Example\n\n[DeviceComissioning]\nNodeID=1\nNodeName=PLC\nBaudrate=125\n'
+              'NetNumber=1\n\n'
+              '[1F85]\nObjectType=0x8\nCompactSubObj=127\n\n[1F85Value]\nNrOfEntries=3\n10=0xEC\n12=0x9A\n13=0x9A\n\n'
+              '[1F86Value]\nNrOfEntries=3\n10=0x1234\n12=3\n13=3\n\n'
+              '[1F87sub0C]\nParameterValue=0x00020001\n[1F87sub0D]\nParameterValue=0\n\n'
+              '[1F88Value]\nNrOfEntries=3\n10=0x1001\n12=0x3012\n13=0x3013\n')
+    spare = ('[DeviceInfo]\nVendorNumber=0xEC\nProductNumber=0x1234\nRevisionNumber=0x10002\n\n'
+             '[DeviceComissioning]\nNodeID=255\nNodeName=spare\nLSS_SerialNumber=0x1099\n')
+    return {'drive-left.dcf': left, 'drive-right.dcf': right, 'master.dcf': master, 'spare.dcf': spare}
+
+
+def map_entries(text):
+    """{serial: node-ID} of the active map entries lssctl printed."""
+    entries = {}
+    for x in text.splitlines():
+        m = re.search(r'^\s*\{ vendor = .* serial = 0x([0-9a-f]{8}); node_id = (\d+); \}', x)
+        if m:
+            entries[int(m.group(1), 16)] = int(m.group(2))
+    return entries
+
+
+def test_dcf():
+    """lssd's map from the integrator's DCFs: lely-core's NMT master and slave
+    DCFs (public files) and the DCFs of the rest of the network, read through
+    the bus's `dcf` patterns and merged with its `devices`; lssd
+    --check-config shows each entry with its file, lssctl import-dcf prints
+    the same map, the boot pass (default timing) puts every device at its
+    node-ID, scan --as-dcf writes the DCFs of what it found, which
+    import-dcf reads into the same map, and a reload with a bad DCF names it
+    and keeps the map."""
+    cfg = ('buses = (\n  {\n    interface = "vcan0";\n    auto_assign = true;\n'
+           '    devices = ( { vendor = 0xEC; product = 0x1234; serial = 0x%x; node_id = %d; } );\n'
+           '    dcf = [ "dcf/*.dcf" ];\n  }\n);\n' % (DCF_CONF.serial, DCF_MAP[DCF_CONF.serial]))
+    env = Env({'vcan0': DCF_SLAVES}, config=cfg, candump=True, notify=True, start_lssd=False)
+    with env:
+        folder = os.path.join(env.dir, 'dcf')
+        os.mkdir(folder)
+        for name in ('lely-co-nmt-master.dcf', 'lely-co-nmt-slave.dcf'):
+            shutil.copy(os.path.join(DCF_DATA, name), folder)
+        for name, text in dcf_files().items():
+            with open(os.path.join(folder, name), 'w', newline='') as f:
+                f.write(text)
+        config_path = os.path.join(env.dir, 'lssd.conf')
+        with open(config_path, 'w') as f:
+            f.write(cfg)
+
+        # lssd --check-config: every entry with the file it came from
+        chk = subprocess.run([os.environ.get('LSSD_BINARY', 'lssd'), '--check-config', config_path],
+                             capture_output=True, text=True, timeout=60)
+        env.step('lssd --check-config:\n' + chk.stdout + chk.stderr)
+        expect_eq(chk.returncode, 0, 'lssd --check-config with the DCFs: %s' % chk.stderr)
+        entries = [x for x in chk.stdout.splitlines() if ' -> node-ID ' in x]
+        expect_eq(len(entries), len(DCF_MAP), 'entries: %r' % entries)
+        for serial, node in DCF_MAP.items():
+            expect(any(('serial 0x%08x -> node-ID %d' % (serial, node)) in x for x in entries),
+                   'serial 0x%x at node-ID %d in %r' % (serial, node, entries))
+        expect(any(x.startswith('  %s/lely-co-nmt-master.dcf:230: vendor 0x00000360' % folder) for x in entries),
+               "lely's device names the master's DCF: %r" % entries)
+        expect(any(x.startswith('  %s/drive-right.dcf:5: ' % folder) for x in entries), 'drive-right: %r' % entries)
+        expect(any(x.startswith('  line 5: ') for x in entries), "lssd.conf's entry: %r" % entries)
+        expect('6 mapped devices (5 from DCFs)' in chk.stdout, 'the bus: %r' % chk.stdout)
+        expect('%s/spare.dcf:7: left out of the map of vcan0 (NodeName "spare"): NodeID 255' % folder in chk.stderr,
+               'spare.dcf left out: %r' % chk.stderr)
+
+        # lssctl import-dcf: the same map from the same files
+        rc, out, err = lssctl(env, 'import-dcf', '--bus', 'vcan0', *sorted(glob.glob(os.path.join(folder, '*.dcf'))))
+        env.step('lssctl import-dcf:\n' + out + err)
+        expect_eq((rc, err), (0, ''), 'lssctl import-dcf')
+        expect_eq(map_entries(out), {s: n for s, n in DCF_MAP.items() if s != DCF_CONF.serial}, 'import-dcf entries')
+        expect('bitrate = 125000;' in out, 'the DCFs\' Baudrate: %r' % out)
+
+        # the boot pass at lssd's default timing: every device at its node-ID
+        env._start_lssd()
+        ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=600, what='READY=1')
+        env.step('READY=1 with STATUS=%s' % ready.get('STATUS'))
+        expect('%d assigned' % len(DCF_MAP) in ready.get('STATUS', ''), 'STATUS: %r' % ready.get('STATUS'))
+        for s in DCF_SLAVES:
+            want = DCF_MAP.get(s.serial)
+            p = dev('vcan0', s)
+            expect_eq(env.get(p, DEVICE_IFACE, 'NodeId'), want or 255, 'NodeId of 0x%x' % s.serial)
+            expect_eq(env.get(p, DEVICE_IFACE, 'MappedNodeId'), want or 0, 'MappedNodeId of 0x%x' % s.serial)
+        if env.real:
+            got = slave_ids(env, 'vcan0', DCF_SLAVES)
+            expect_eq(got, {s.serial: ((DCF_MAP[s.serial],) * 2 if s.serial in DCF_MAP else (255, 255))
+                            for s in DCF_SLAVES}, 'active and stored node-IDs after the boot pass')
+            expect(all_waiting(env, 'vcan0', DCF_SLAVES), 'slaves left in configuration')
+
+        # and back out: a DCF fragment per device found, which import-dcf
+        # reads into the same map
+        out_dir = os.path.join(env.dir, 'found')
+        rc, out, err = lssctl(env, 'scan', '--as-dcf', out_dir)
+        env.step('lssctl scan --as-dcf:\n' + out + err)
+        expect_eq((rc, err), (0, ''), 'lssctl scan --as-dcf')
+        expect_eq(sorted(os.listdir(out_dir)), sorted('vcan0-node%03d.dcf' % n for n in DCF_MAP.values()),
+                  'the DCFs written')
+        rc, out, err = lssctl(env, 'import-dcf', '--bus', 'vcan0', *sorted(glob.glob(os.path.join(out_dir, '*.dcf'))))
+        expect_eq((rc, err), (0, ''), 'lssctl import-dcf of what scan --as-dcf wrote')
+        expect_eq(map_entries(out), DCF_MAP, 'the map read back from scan --as-dcf')
+
+        # a bad DCF on reload: named, the map stays; fixed, it is read
+        bad = os.path.join(folder, 'late.dcf')
+        for text, want in (('[DeviceComissioning]\r\nNodeID=0x\r\n', bad + ':2: [DeviceComissioning] NodeID'),
+                           ('[DeviceInfo]\nVendorNumber=0xEC\nProductNumber=0x1234\n[DeviceComissioning]\nNodeID=30\n'
+                            'LSS_SerialNumber=0x1001\n',
+                            bad + ':5: one device gets two node-IDs')):
+            with open(bad, 'w', newline='') as f:
+                f.write(text)
+            rc, out, err = lssctl(env, 'reload')
+            expect_eq(rc, 15, 'lssctl reload with a bad DCF: %r %r' % (out, err))
+            expect(want in err, 'lssctl reload names the DCF: %r' % err)
+            expect_eq(env.get(dev('vcan0', DCF_LEFT), DEVICE_IFACE, 'MappedNodeId'), 10, 'the map after a bad reload')
+        os.unlink(bad)
+        rc, out, err = lssctl(env, 'reload')
+        expect_eq(rc, 0, 'lssctl reload: %r %r' % (out, err))
+        expect_eq(auto_assign(env)[0], [], 'AutoAssign after the reload: nothing to change')
+        env.alive()
+
+
 TESTS = {
     'encoder': test_encoder,
     'encoder-mixed': test_encoder_mixed,
@@ -654,6 +807,7 @@ TESTS = {
     'bad-config': test_bad_config,
     'replace': test_replace,
     'replace-ambiguous': test_replace_ambiguous,
+    'dcf': test_dcf,
 }
 
 if __name__ == '__main__':

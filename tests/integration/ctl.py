@@ -8,6 +8,7 @@ with the real policy, lss-sim on vcan or lssd --simulate), asserting on
 completion loads and completes, and every manual page renders without
 warnings."""
 
+import glob
 import json
 import os
 import pty
@@ -15,7 +16,9 @@ import re
 import select
 import signal
 import subprocess
+import shutil
 import sys
+import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -284,6 +287,166 @@ def check_printed_map(env, out):
                            text=True)
     expect_eq(check.returncode, 0, 'lssd --check-config on the printed map: %s%s' % (check.stdout, check.stderr))
     expect('warning' not in (check.stdout + check.stderr).lower(), 'check-config warns: %r' % check.stderr)
+
+
+# ---- DCFs (issue 41) ----
+
+# the DCFs of public CANopen projects the DCF reader's unit tests read
+DCF_DATA = os.path.join(SOURCE_ROOT, 'tests', 'unit', 'dcf')
+LELY_MASTER = os.path.join(DCF_DATA, 'lely-co-nmt-master.dcf')
+LELY_SLAVE = os.path.join(DCF_DATA, 'lely-co-nmt-slave.dcf')
+# the device both describe, at node-ID 2
+LELY_DEVICE = Slave(0x360, 2, 3, 4)
+MAP_ENTRY = '{ vendor = 0x%08x; product = 0x%08x; revision = 0x%08x; serial = 0x%08x; node_id = %s; }'
+
+
+def lssctl_alone(*args):
+    """lssctl with no lssd anywhere (a system bus that is not there)."""
+    p = subprocess.run([LSSCTL] + list(args), capture_output=True, text=True, timeout=60,
+                       env=dict(os.environ, DBUS_SYSTEM_BUS_ADDRESS='unix:path=/nonexistent/bus', LANG='C.UTF-8'))
+    return Result(args, p.returncode, p.stdout, p.stderr)
+
+
+def test_import_dcf():
+    """import-dcf (issue 41): the integrator's DCFs as the buses of
+    lssd.conf(5), with no lssd running. The DCFs of public CANopen projects
+    (tests/unit/dcf): lely-core's NMT master and slave name one device, one
+    entry; every other file is a comment saying why it is none. The printed
+    map passes lssd --check-config, and lssd's AutoAssign with it gives the
+    device its node-ID. Errors name FILE:LINE and print nothing."""
+    files = sorted(glob.glob(os.path.join(DCF_DATA, '*.dcf')) + glob.glob(os.path.join(DCF_DATA, '*.eds')))
+    r = lssctl_alone('import-dcf', '--bus', 'vcan0', *files)
+    expect_eq(r.rc, 0, 'import-dcf of the public DCFs: %r' % r)
+    lines = r.out.splitlines()
+    expect(lines[0].startswith("# lssd.conf(5) buses from CiA 306 DCFs by 'lssctl import-dcf', lssctl "),
+           'header: %r' % r.out)
+    expect('# 1 device from %d files, 7 left out (see there).' % len(files) in r.out, 'counts: %r' % r.out)
+    entries = [x.strip() for x in lines if x.strip().startswith('{ vendor')]
+    expect_eq(entries, [MAP_ENTRY % (LELY_DEVICE.identity + (2,)) + '  # %s:230, also %s:17' % (LELY_MASTER, LELY_SLAVE)],
+              'the one entry, from the master and the slave')
+    left = [x.strip() for x in lines if x.strip().startswith('# left out: ')]
+    expect_eq(len(left), 7, 'left out: %r' % left)
+    expect('# left out: %s:33 (NodeName "Some name"): no serial number (LSS_SerialNumber 0 or not given, no '
+           'ParameterValue of [1018sub4])' % os.path.join(DCF_DATA, 'canopen-python-sample.eds') in left,
+           'canopen-python sample.eds left out: %r' % left)
+    expect('# left out: %s:52: NodeID 0 is out of 1..127' % os.path.join(DCF_DATA, 'ros_canopen-ISD860.dcf') in left,
+           'ISD860 left out: %r' % left)
+    expect('interface = "vcan0";' in r.out and 'auto_assign = true;' in r.out, 'the bus: %r' % r.out)
+    expect('# bitrate = ...;  the DCFs do not say the bit rate (Baudrate): give it' in r.out, 'no bit rate: %r' % r.out)
+    e35 = os.path.join(DCF_DATA, 'canopen-python-e35.eds')
+    warnings = r.err.splitlines()
+    expect_eq(len(warnings), 3, 'warnings: %r' % r.err)
+    expect(all(w.startswith('lssctl: warning: %s:' % e35) for w in warnings), 'e35.eds warnings: %r' % r.err)
+
+    d = tempfile.mkdtemp(prefix='lssd-test-dcf.')
+    try:
+        # errors: FILE:LINE, nothing printed, status 15 (bad-config); every file read
+        bad = os.path.join(d, 'bad.dcf')
+        with open(bad, 'w') as f:
+            f.write('[DeviceComissioning]\r\nNodeID=0x\r\n')
+        other = os.path.join(d, 'other.dcf')
+        with open(LELY_SLAVE) as f:
+            text = f.read()
+        with open(other, 'w') as f:
+            f.write(text.replace('NodeID=0x02', 'NodeID=0x03'))
+        for args, want in ((('import-dcf', bad, LELY_SLAVE),
+                            ['%s:2: [DeviceComissioning] NodeID: "0x" is not a number' % bad,
+                             '1 error in the DCFs (above): no map printed.']),
+                           (('import-dcf', LELY_SLAVE, other, bad, os.path.join(d, 'none.dcf')),
+                            ['%s:17: one device gets two node-IDs: vendor 0x00000360, product 0x00000002, serial '
+                             '0x00000004 gets node-ID 3 here and node-ID 2 at %s:17' % (other, LELY_SLAVE),
+                             '%s:2:' % bad, '%s: cannot open: No such file or directory' % os.path.join(d, 'none.dcf'),
+                             '3 errors in the DCFs (above): no map printed.'])):
+            r = lssctl_alone(*args)
+            expect_eq((r.rc, r.out), (EXIT['bad-config'], ''), 'import-dcf with errors: %r' % r)
+            for w in want:
+                expect(w in r.err, 'import-dcf %r: %r lacks %r' % (args, r.err, w))
+        for args, text in ((('import-dcf',), "Too few arguments for 'import-dcf'"),
+                           (('import-dcf', '--json', LELY_SLAVE), "Option --json does not go with 'import-dcf'"),
+                           (('import-dcf', '--bus', 'can 0', LELY_SLAVE), "Invalid --bus 'can 0'")):
+            r = lssctl_alone(*args)
+            expect_eq((r.rc, r.out), (EXIT['usage'], ''), 'lssctl %r: %r' % (args, r))
+            expect(text in r.err, 'lssctl %r: %r lacks %r' % (args, r.err, text))
+    finally:
+        shutil.rmtree(d)
+
+    # the printed map: lssd takes it, and its boot pass (auto_assign = true)
+    # makes it true; an AutoAssign after it changes nothing
+    r = lssctl_alone('import-dcf', '--bus', 'vcan0', LELY_MASTER, LELY_SLAVE)
+    expect_eq((r.rc, r.err), (0, ''), 'import-dcf of lely\'s pair: %r' % r)
+    with Env({'vcan0': [LELY_DEVICE]}) as env:
+        ctl = Ctl(env)
+        # a file name with a line break stays in its comment
+        odd = os.path.join(env.dir, 'odd\nname.dcf')
+        shutil.copy(LELY_SLAVE, odd)
+        odd_out = lssctl_alone('import-dcf', odd).out
+        expect('# %s:17' % odd.replace('\n', '?') in odd_out, 'the odd name: %r' % odd_out)
+        check_printed_map(env, odd_out)
+        check_printed_map(env, r.out)
+        env.config = r.out
+        env.restart_lssd()
+        got = ctl.ok('auto-assign', '--json').json  # queued behind the boot pass
+        expect_eq([(x['serial'], x['outcome'], x['new_node_id']) for x in got], [(4, 'unchanged', 2)],
+                  'auto-assign after the boot pass with the map of the DCFs')
+        dev = ctl.ok('list', '--json').json
+        expect_eq([(x['serial'], x['node_id'], x['mapped_node_id'], x['state']) for x in dev], [(4, 2, 2, 'assigned')],
+                  'the device after the boot pass')
+        expect('Ready' in env.lssd_output() and '1 assigned' in env.lssd_output(), 'the boot pass assigned it: %s'
+               % env.lssd_output()[-2000:])
+        env.alive()
+
+
+def test_scan_dcf():
+    """scan --as-dcf DIR (issue 41): one DCF fragment per configured device
+    found ([DeviceInfo], [DeviceComissioning] NodeID, Baudrate and
+    LSS_SerialNumber, 1018h; CRLF), for the integrator's tool; read back by
+    import-dcf they are the map scan --as-config prints."""
+    configured = [Slave(0xEC, 0x1234, 0x00010002, 0x1001, 5), Slave(0xEC, 0x1234, 0x00010002, 0x1002, 6),
+                  Slave(0xEC, 0x1234, 0x00010003, 0x80001003, 7)]
+    fresh = Slave(0xEC, 0x1234, 0x00010002, 0x1004)
+    with Env({'vcan0': configured + [fresh]}) as env:
+        ctl = Ctl(env)
+        folder = os.path.join(env.dir, 'dcf-out')
+        ctl.fails('usage', "Option '--as-dcf' needs a value", 'scan', '--as-dcf')
+        ctl.fails('usage', '--as-dcf does not go with --json', 'scan', '--as-dcf', folder, '--json')
+        ctl.fails('usage', '--as-config does not go with --as-dcf', 'scan', '--as-config', '--as-dcf', folder)
+        ctl.fails('usage', "Option --as-dcf does not go with 'list'", 'list', '--as-dcf', folder)
+        for _ in range(2):  # the second time over the files of the first
+            r = ctl.ok('scan', '--as-dcf', folder, '--vendor', '0xEC', '--product', '0x1234')
+            env.step('lssctl scan --as-dcf:\n' + r.out)
+            names = ['vcan0-node%03d.dcf' % s.node_id for s in configured]
+            expect_eq(sorted(os.listdir(folder)), names, 'the files written')
+            for s in configured:
+                expect(('vcan0: device %s at node-ID %d: %s/vcan0-node%03d.dcf' % (ident8(s), s.node_id, folder,
+                                                                                    s.node_id)) in r.out,
+                       'said: %r' % r.out)
+            expect('vcan0: device %s not written: non-configured (node-ID 255)' % ident8(fresh) in r.out,
+                   'the non-configured device: %r' % r.out)
+            expect(r.out.endswith('3 DCFs written to %s.\n' % folder), 'summary: %r' % r.out)
+        with open(os.path.join(folder, 'vcan0-node005.dcf'), 'rb') as f:
+            data = f.read()
+        expect(data.count(b'\r\n') == data.count(b'\n') > 40, 'CRLF line ends: %r' % data[:200])
+        text = data.decode().replace('\r\n', '\n')
+        for want in ('[DeviceInfo]\nVendorNumber=0x000000EC\nProductNumber=0x00001234\nRevisionNumber=0x00010002\n',
+                     '[DeviceComissioning]\nNodeID=5\nBaudrate=125\nLSS_SerialNumber=0x00001001\n',
+                     '[1018sub4]\nParameterName=Serial number\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\n'
+                     'ParameterValue=0x00001001\n', 'FileName=vcan0-node005.dcf\n', 'CreatedBy=lssctl '):
+            expect(want in text, 'vcan0-node005.dcf lacks %r:\n%s' % (want, text))
+
+        # read back: the map scan --as-config prints
+        r = ctl.ok('import-dcf', '--bus', 'vcan0', *sorted(glob.glob(os.path.join(folder, '*.dcf'))))
+        back = [x.strip().split('  #')[0].rstrip(',') for x in r.out.splitlines() if x.strip().startswith('{ vendor')]
+        printed = ctl.ok('scan', '--as-config', '--vendor', '0xEC', '--product', '0x1234').out
+        active = [x.strip().split('  #')[0].rstrip(',') for x in printed.splitlines() if x.strip().startswith('{ vendor')]
+        expect_eq(back, active, 'import-dcf of the written DCFs against scan --as-config')
+        expect_eq(back, [MAP_ENTRY % (s.identity + (s.node_id,)) for s in configured], 'the entries')
+        expect('bitrate = 125000;' in r.out, 'the bit rate back from Baudrate: %r' % r.out)
+
+        # a folder that cannot be made
+        blocker = os.path.join(env.dir, 'a-file')
+        open(blocker, 'w').close()
+        r = ctl('scan', '--as-dcf', os.path.join(blocker, 'sub'))
+        expect(r.rc == EXIT['failure'] and 'Failed to make the folder %s/sub' % blocker in r.err, 'unwritable: %r' % r)
 
 
 def test_scan_config():
@@ -965,7 +1128,7 @@ def test_bad_arguments():
             expect("Try 'lssctl --help'" in r.err, 'hint: %r' % r.err)
         h = ctl.ok('--help').out
         for verb in ('status', 'list', 'scan', 'assign', 'unassign', 'auto-assign', 'set-bitrate', 'reload', 'monitor',
-                     'raw'):
+                     'raw', 'import-dcf'):
             expect(re.search(r'^  %s\b' % verb, h, re.M), '--help lacks ' + verb)
         expect(ctl.ok('--version').out.startswith('lssctl '), '--version')
 
@@ -993,7 +1156,13 @@ def test_completion():
     expect_eq((p.returncode, p.stderr), (0, ''), 'loading the completion script')
     expect('_lssctl' in p.stdout, 'complete -p: %r' % p.stdout)
     expect_eq(complete(['lssctl', '']), sorted(['status', 'list', 'scan', 'assign', 'unassign', 'auto-assign',
-                                                 'set-bitrate', 'reload', 'monitor', 'raw']), 'commands')
+                                                 'set-bitrate', 'reload', 'monitor', 'raw', 'import-dcf']), 'commands')
+    expect_eq(complete(['lssctl', 'import-dcf', '--']), ['--bus'], 'import-dcf options')
+    expect('--as-dcf' in complete(['lssctl', 'scan', '--']), 'scan options')
+    expect_eq(complete(['lssctl', 'scan', '--as-dcf', os.path.join(SOURCE_ROOT, 'tests', 'unit', 'dc')]), [DCF_DATA],
+              'scan --as-dcf: folders')
+    expect_eq(complete(['lssctl', 'import-dcf', os.path.join(DCF_DATA, 'lely-co-nmt-s')]), [LELY_SLAVE],
+              'import-dcf: file names')
     expect_eq(complete(['lssctl', 'au']), ['auto-assign'], 'command prefix')
     expect('--no-store' in complete(['lssctl', 'assign', '--']), 'assign options')
     expect_eq(complete(['lssctl', 'unassign', '--']), sorted(['--bus', '--json', '--no-store', '--reset', '--quiet']),
@@ -1044,6 +1213,8 @@ TESTS = {
     'list': test_list,
     'scan': test_scan,
     'scan-config': test_scan_config,
+    'import-dcf': test_import_dcf,
+    'scan-dcf': test_scan_dcf,
     'scan-two-buses': test_scan_two_buses,
     'assign': test_assign,
     'assign-taken': test_assign_taken,

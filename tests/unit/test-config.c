@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 #include <check.h>
+#include <dirent.h>
 #include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -9,6 +10,7 @@
 #include <unistd.h>
 
 #include "config/lssconf.h"
+#include "diag-util.h"
 #include "sim/sim_random.h"
 #include "util/time_util.h"
 
@@ -56,38 +58,6 @@ static int load_len(const char *text, size_t len, lssconf **ret, lssconf_diag *d
 static int load(const char *text, lssconf **ret, lssconf_diag *d) {
         return load_len(text, strlen(text), ret, d);
 }
-
-/* A message of that severity containing every one of the NULL-terminated substrings. */
-static bool has_message(const lssconf_diag *d, lssconf_diag_severity sev, ...) {
-        for (size_t i = 0; i < d->n_messages; i++) {
-                if (d->messages[i].severity != sev)
-                        continue;
-                bool all = true;
-                va_list ap;
-                va_start(ap, sev);
-                for (const char *s; (s = va_arg(ap, const char *)); )
-                        if (!strstr(d->messages[i].text, s))
-                                all = false;
-                va_end(ap);
-                if (all)
-                        return true;
-        }
-        return false;
-}
-
-static void dump(const lssconf_diag *d) {
-        for (size_t i = 0; i < d->n_messages; i++)
-                fprintf(stderr, "  %s: %s\n", lssconf_diag_severity_to_string(d->messages[i].severity),
-                        d->messages[i].text);
-}
-
-#define expect_message(d, sev, ...) \
-        do { \
-                if (!has_message(d, sev, __VA_ARGS__, (const char *) NULL)) { \
-                        dump(d); \
-                        ck_abort_msg("no %s with: %s", lssconf_diag_severity_to_string(sev), #__VA_ARGS__); \
-                } \
-        } while (0)
 
 /* The text must fail to load with an error carrying all the substrings. */
 #define expect_load_error(text, ...) \
@@ -1109,6 +1079,246 @@ START_TEST(load_buffer_api) {
 }
 END_TEST
 
+/* ---- dcf: the map from CiA 306 DCFs (config/dcf.h has the reader's tests) ---- */
+
+/* A folder of its own; the caller removes it with remove_folder(). */
+static char *make_folder(void) {
+        const char *tmp = getenv("TMPDIR");
+        char *dir;
+        ck_assert_int_ge(asprintf(&dir, "%s/lssd-test-dcf-XXXXXX", tmp && *tmp ? tmp : "/tmp"), 0);
+        ck_assert_ptr_nonnull(mkdtemp(dir));
+        return dir;
+}
+
+static void put_file(const char *dir, const char *name, const char *text) {
+        char *path;
+        ck_assert_int_ge(asprintf(&path, "%s/%s", dir, name), 0);
+        FILE *f = fopen(path, "w");
+        ck_assert_ptr_nonnull(f);
+        ck_assert_int_eq(fputs(text, f) >= 0, 1);
+        ck_assert_int_eq(fclose(f), 0);
+        free(path);
+}
+
+static void remove_folder(char *dir) {
+        DIR *d = opendir(dir);
+        ck_assert_ptr_nonnull(d);
+        for (struct dirent *e; (e = readdir(d)); ) {
+                char *path;
+                if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
+                        continue;
+                ck_assert_int_ge(asprintf(&path, "%s/%s", dir, e->d_name), 0);
+                ck_assert_int_eq(unlink(path), 0);
+                free(path);
+        }
+        closedir(d);
+        ck_assert_int_eq(rmdir(dir), 0);
+        free(dir);
+}
+
+/* dir/lssd.conf with text, loaded as lssd does */
+static int load_in(const char *dir, const char *text, lssconf **ret, lssconf_diag *d) {
+        char *path;
+        put_file(dir, "lssd.conf", text);
+        ck_assert_int_ge(asprintf(&path, "%s/lssd.conf", dir), 0);
+        int r = lssconf_load_file(path, ret, d);
+        free(path);
+        if (r < 0) {
+                ck_assert_ptr_null(*ret);
+                ck_assert(lssconf_diag_has_errors(d));
+        }
+        return r;
+}
+
+#define DCF_DEVICE(node_id, serial) \
+        "[DeviceInfo]\nVendorNumber=0xEC\nProductNumber=0x1234\nRevisionNumber=0x10002\n" \
+        "[DeviceComissioning]\nNodeID=" node_id "\nNodeName=drive " node_id "\nLSS_SerialNumber=" serial "\n"
+#define DCF_MASTER_5 \
+        "[DeviceComissioning]\nNodeID=1\n[1F85Value]\n5=0xEC\n[1F86Value]\n5=0x1234\n[1F88Value]\n5=0x1005\n"
+
+static const char *source_name(const lssconf *c, const lssconf_device *d) {
+        const char *s = lssconf_device_source(c, d);
+        if (!s)
+                return NULL;
+        const char *slash = strrchr(s, '/');
+        return slash ? slash + 1 : s;
+}
+
+START_TEST(dcf_map_from_files) {
+        char *dir = make_folder();
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
+        char buf[LSSCONF_BUS_DESCRIBE_MAX];
+        put_file(dir, "drive5.dcf", DCF_DEVICE("5", "0x1005"));
+        put_file(dir, "drive6.dcf", DCF_DEVICE("6", "0x1006"));
+        put_file(dir, "master.dcf", DCF_MASTER_5);
+        put_file(dir, "spare.dcf", DCF_DEVICE("255", "0x1099"));
+        put_file(dir, "notes.txt", "not read");
+        ck_assert_int_eq(load_in(dir, "buses = ( {\n"
+                                      "  interface = \"can0\";\n"
+                                      "  bitrate = 250000;\n"
+                                      "  vendor = 0xEC; product = 0x1234;\n"
+                                      "  devices = ( { serial = 0x1007; node_id = 7; },\n"
+                                      "              { serial = 0x1006; node_id = 6; } );\n"
+                                      "  dcf = [ \"*.dcf\" ];\n"
+                                      "} );\n", &c, &d), 0);
+        const lssconf_bus *b = &c->buses[0];
+        /* lssd.conf's two, then drive5 (also the master's); drive6 is devices[1] */
+        ck_assert_uint_eq(b->n_devices, 3);
+        ck_assert_ptr_null(lssconf_device_source(c, &b->devices[0]));
+        ck_assert_uint_eq(b->devices[0].line, 5);
+        ck_assert_ptr_null(lssconf_device_source(c, &b->devices[1]));
+        ck_assert_str_eq(source_name(c, &b->devices[2]), "drive5.dcf");
+        ck_assert_uint_eq(b->devices[2].line, 6);
+        ck_assert_uint_eq(b->devices[2].node_id, 5);
+        ck_assert_uint_eq(b->devices[2].identity.serial, 0x1005);
+        ck_assert(b->devices[2].has_revision);
+        ck_assert_uint_eq(b->devices[2].identity.revision, 0x10002);
+        ck_assert_ptr_eq(lssconf_lookup_device(b, &b->devices[2].identity), &b->devices[2]);
+        ck_assert_uint_eq(c->n_sources, 1);
+        /* the non-configured spare: left out, warned; notes.txt not read */
+        ck_assert_uint_eq(d.n_errors, 0);
+        ck_assert_uint_eq(d.n_warnings, 1);
+        expect_message(&d, LSSCONF_DIAG_WARNING, "spare.dcf:6: left out of the map of can0 (NodeName \"drive 255\"): "
+                       "NodeID 255: non-configured");
+        ck_assert_str_eq(lssconf_bus_describe(b, buf, sizeof(buf)),
+                         "can0: 250000 bit/s, 3 mapped devices (1 from DCFs), auto-assign off, store on, unknown "
+                         "devices: ignore, nmt-stop off, replace off, reset after pass off, bit-rate change off, LSS "
+                         "timeout 20 ms (adaptive)");
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
+
+        /* a pattern of a file's name, an absolute one, several buses, the same file twice */
+        char *abs_master;
+        ck_assert_int_ge(asprintf(&abs_master, "buses = ( { interface = \"can0\"; dcf = [ \"drive6.dcf\", \"%s/master.dcf\", "
+                                  "\"master.dcf\" ]; },\n{ interface = \"can1\"; dcf = \"drive6.dcf\"; } );\n", dir), 0);
+        ck_assert_int_eq(load_in(dir, abs_master, &c, &d), 0);
+        ck_assert_uint_eq(c->buses[0].n_devices, 2);
+        ck_assert_str_eq(source_name(c, &c->buses[0].devices[0]), "drive6.dcf");
+        ck_assert_str_eq(source_name(c, &c->buses[0].devices[1]), "master.dcf");
+        ck_assert(!c->buses[0].devices[1].has_revision);
+        ck_assert_uint_eq(c->buses[1].n_devices, 1);
+        ck_assert_uint_eq(c->n_sources, 2);
+        ck_assert_uint_eq(d.n_messages, 0);
+        lssconf_free(c);
+        free(abs_master);
+        remove_folder(dir);
+}
+END_TEST
+
+/* lely-core's NMT slave and master (tests/unit/dcf/): one entry */
+START_TEST(dcf_public_files) {
+        char *dir = make_folder();
+        char *data = test_data_path("dcf"), *text;
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
+        ck_assert_int_ge(asprintf(&text, "buses = ( { interface = \"can0\"; dcf = [ \"%s/lely-co-nmt-*.dcf\" ]; } );\n",
+                                  data), 0);
+        ck_assert_int_eq(load_in(dir, text, &c, &d), 0);
+        ck_assert_uint_eq(c->buses[0].n_devices, 1);
+        const lssconf_device *e = &c->buses[0].devices[0];
+        ck_assert_str_eq(source_name(c, e), "lely-co-nmt-master.dcf");
+        ck_assert_uint_eq(e->line, 230);
+        ck_assert_uint_eq(e->node_id, 2);
+        ck_assert_uint_eq(e->identity.vendor, 0x360);
+        ck_assert_uint_eq(e->identity.serial, 4);
+        ck_assert_uint_eq(d.n_messages, 0);
+        lssconf_free(c);
+        free(text);
+        free(data);
+        remove_folder(dir);
+}
+END_TEST
+
+START_TEST(dcf_errors) {
+        static const struct {
+                const char *file;  /* bad.dcf, or NULL */
+                const char *conf;  /* the bus's keys after interface */
+                const char *message[2];
+        } cases[] = {
+                /* an error in a DCF: its file and line */
+                { "[DeviceComissioning]\nNodeID=0x\n", "dcf = [ \"*.dcf\" ];",
+                  { "/bad.dcf:2: [DeviceComissioning] NodeID: \"0x\" is not a number", NULL } },
+                { "[DeviceComissioning]\nNodeName=x\n", "dcf = [ \"bad.dcf\" ];",
+                  { "/bad.dcf:1: [DeviceComissioning] without NodeID", NULL } },
+                /* in conflict with lssd.conf's devices, either way */
+                { DCF_DEVICE("9", "0x1005"), "devices = ( { vendor = 0xEC; product = 0x1234; serial = 0x1005; "
+                  "node_id = 5; } );\n dcf = [ \"*.dcf\" ];",
+                  { "/bad.dcf:6: one device gets two node-IDs", "gets node-ID 9 here and node-ID 5 at " } },
+                { DCF_DEVICE("5", "0x1005"), "devices = ( { vendor = 0xEC; product = 0x1234; serial = 0x1777; "
+                  "node_id = 5; } );\n dcf = [ \"*.dcf\" ];",
+                  { "/bad.dcf:6: node-ID 5 is given to two devices", "/lssd.conf:2" } },
+                /* a node-ID of a DCF in the pool */
+                { DCF_DEVICE("105", "0x1005"), "unknown = \"pool\"; pool = [ 100, 110 ]; dcf = [ \"*.dcf\" ];",
+                  { "/lssd.conf:2: buses[0].pool: 100..110 contains node-ID 105 mapped by ", "/bad.dcf:6" } },
+                /* what names no file, or cannot be read */
+                { NULL, "dcf = [ \"missing.dcf\" ];",
+                  { "/missing.dcf: cannot open: No such file or directory", NULL } },
+                { NULL, "dcf = [ \"nofolder/*.dcf\" ];",
+                  { "/lssd.conf:2: buses[0].dcf[0]: cannot read ", "/nofolder: No such file or directory" } },
+                /* the key itself */
+                { NULL, "dcf = 5;", { "/lssd.conf:2: buses[0].dcf: expected [ \"GLOB\", ... ], got an integer", NULL } },
+                { NULL, "dcf = [ \"\" ];", { "/lssd.conf:2: buses[0].dcf[0]: an empty pattern names no file", NULL } },
+                { NULL, "dcf = ( \"a\", 5 );", { "buses[0].dcf[1]: expected a file name pattern \"GLOB\", got an "
+                                                 "integer", NULL } },
+        };
+        for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+                char *dir = make_folder(), *text;
+                lssconf_diag d = LSSCONF_DIAG_INIT;
+                lssconf *c = NULL;
+                if (cases[i].file)
+                        put_file(dir, "bad.dcf", cases[i].file);
+                ck_assert_int_ge(asprintf(&text, "buses = ( { interface = \"can0\";\n %s } );\n", cases[i].conf), 0);
+                int r = load_in(dir, text, &c, &d);
+                if (r != -EINVAL || !has_message(&d, LSSCONF_DIAG_ERROR, cases[i].message[0], cases[i].message[1],
+                                                 (const char *) NULL)) {
+                        dump(&d);
+                        ck_abort_msg("case %zu: %d, no error with %s", i, r, cases[i].message[0]);
+                }
+                lssconf_diag_clear(&d);
+                free(text);
+                remove_folder(dir);
+        }
+}
+END_TEST
+
+START_TEST(dcf_warnings) {
+        char *dir = make_folder();
+        lssconf_diag d = LSSCONF_DIAG_INIT;
+        lssconf *c = NULL;
+        put_file(dir, "a.dcf", DCF_DEVICE("5", "0x1005") "Baudrate=500\n");
+        ck_assert_int_eq(load_in(dir, "buses = ( { interface = \"can0\"; bitrate = 250000;\n"
+                                      "dcf = [ \"*.dcf\", \"none-*.dcf\" ]; } );\n", &c, &d), 0);
+        ck_assert_uint_eq(c->buses[0].n_devices, 1);
+        ck_assert_uint_eq(d.n_warnings, 2);
+        expect_message(&d, LSSCONF_DIAG_WARNING, "/lssd.conf:2: buses[0].dcf: the DCFs say Baudrate 500 kbit/s, the bus "
+                       "runs at 250000 bit/s (bitrate)");
+        expect_message(&d, LSSCONF_DIAG_WARNING, "/lssd.conf:2: buses[0].dcf[1]: \"", "/none-*.dcf\" matches no file");
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
+
+        /* the same entry in lssd.conf and a DCF: one, lssd.conf's */
+        ck_assert_int_eq(load_in(dir, "buses = ( { interface = \"can0\"; bitrate = 500000;\n"
+                                      "devices = ( { vendor = 0xEC; product = 0x1234; serial = 0x1005; node_id = 5; } );\n"
+                                      "dcf = [ \"*.dcf\" ]; } );\n", &c, &d), 0);
+        ck_assert_uint_eq(c->buses[0].n_devices, 1);
+        ck_assert_ptr_null(lssconf_device_source(c, &c->buses[0].devices[0]));
+        ck_assert(!c->buses[0].devices[0].has_revision);
+        ck_assert_uint_eq(d.n_messages, 0);
+        lssconf_free(c);
+
+        /* from memory: no file is read */
+        const char *text = "buses = ( { interface = \"can0\"; dcf = [ \"*.dcf\" ]; } );\n";
+        ck_assert_int_eq(lssconf_load_buffer(text, strlen(text), "mem.conf", &c, &d), 0);
+        ck_assert_uint_eq(c->buses[0].n_devices, 0);
+        expect_message(&d, LSSCONF_DIAG_WARNING, "mem.conf:1: buses[0].dcf: not read (a configuration from memory "
+                       "reads no file)");
+        lssconf_free(c);
+        lssconf_diag_clear(&d);
+        remove_folder(dir);
+}
+END_TEST
+
 int main(void) {
         Suite *s = suite_create("config");
         TCase *tc = tcase_create("load");
@@ -1144,6 +1354,10 @@ int main(void) {
         tcase_add_test(tc, built_in_config);
         tcase_add_test(tc, enum_strings);
         tcase_add_test(tc, load_buffer_api);
+        tcase_add_test(tc, dcf_map_from_files);
+        tcase_add_test(tc, dcf_public_files);
+        tcase_add_test(tc, dcf_errors);
+        tcase_add_test(tc, dcf_warnings);
         suite_add_tcase(s, tc);
         SRunner *sr = srunner_create(s);
         srunner_run_all(sr, CK_NORMAL);
