@@ -263,6 +263,19 @@ int master_start_procedure(lss_master *m, lss_proc_fn proc, uint64_t now) {
 
 /* ---- raw services ---- */
 
+/* A raw service's answer is its caller's verdict, and nothing follows it
+ * that a wait could hold up: an answer that comes after the adaptive wait (a
+ * loaded host stalls one for 100-200 ms) is still taken, in a late guard of
+ * at least this long. Only silence costs it. */
+#define RAW_LATE_FLOOR_US 250000u
+#define RAW_REQUEST(m, pc, frame_expr, cs) \
+        do { lss_frame f__; frame_expr; step_lss(m, cs); step_add_tx(m, &f__); raw_patient(m); step_start(m); \
+             PT_YIELD(pc); } while (0)
+
+static void raw_patient(lss_master *m) {
+        m->step.late_us = lss_timing_patient_wait(&m->timing, RAW_LATE_FLOOR_US);
+}
+
 static int proc_switch_global(lss_master *m) {
         PT_BEGIN(&m->pc);
         STEP_REQUEST(m, &m->pc, lss_encode_switch_global(&f__, m->arg.sg.mode), -1);
@@ -272,6 +285,7 @@ static int proc_switch_global(lss_master *m) {
 static int proc_switch_selective(lss_master *m) {
         PT_BEGIN(&m->pc);
         step_selective(m, &m->sel_id);
+        raw_patient(m);
         PT_YIELD(&m->pc);
         m->result.found = step_answered(m);
         if (!m->result.found)
@@ -307,7 +321,7 @@ static bool error_code_ok(lss_master *m, enum lss_service service) {
 
 static int proc_configure_node_id(lss_master *m) {
         PT_BEGIN(&m->pc);
-        STEP_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, m->arg.raw.a), LSS_CS_CONFIGURE_NODE_ID);
+        RAW_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, m->arg.raw.a), LSS_CS_CONFIGURE_NODE_ID);
         if (single_answer_ok(m, LSS_SERVICE_CONFIGURE_NODE_ID, "Configure Node-ID"))
                 error_code_ok(m, LSS_SERVICE_CONFIGURE_NODE_ID);
         PT_END(&m->pc);
@@ -321,14 +335,14 @@ static int proc_configure_node_id_checked(lss_master *m) {
                 goto configure;
         /* identical answers from several slaves merge on the wire: the
          * serial tells them apart */
-        STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, LSS_FIELD_SERIAL), LSS_CS_INQUIRE_SERIAL);
+        RAW_REQUEST(m, &m->pc, lss_encode_inquire(&f__, LSS_FIELD_SERIAL), LSS_CS_INQUIRE_SERIAL);
         if (step_conflict(m)) {
                 master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_SEVERAL_ANSWERS,
                                "more than one slave is in configuration state: Configure Node-ID %u would give "
                                "node-ID %u to all of them", node_id, node_id);
                 goto out;
         }
-        STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
+        RAW_REQUEST(m, &m->pc, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
         if (step_answered(m) && !step_conflict(m) && m->step.answer.data[1] == node_id)
                 goto configure; /* its own node-ID */
         if (m->taken_fn && m->taken_fn(m->taken_ud, node_id, NULL)) {
@@ -346,7 +360,7 @@ static int proc_configure_node_id_checked(lss_master *m) {
                 goto out;
         }
 configure:
-        STEP_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, node_id), LSS_CS_CONFIGURE_NODE_ID);
+        RAW_REQUEST(m, &m->pc, lss_encode_configure_node_id(&f__, node_id), LSS_CS_CONFIGURE_NODE_ID);
         if (single_answer_ok(m, LSS_SERVICE_CONFIGURE_NODE_ID, "Configure Node-ID"))
                 error_code_ok(m, LSS_SERVICE_CONFIGURE_NODE_ID);
 out:;
@@ -355,8 +369,8 @@ out:;
 
 static int proc_configure_bit_timing(lss_master *m) {
         PT_BEGIN(&m->pc);
-        STEP_REQUEST(m, &m->pc, lss_encode_configure_bit_timing(&f__, m->arg.raw.a, m->arg.raw.b),
-                     LSS_CS_CONFIGURE_BIT_TIMING);
+        RAW_REQUEST(m, &m->pc, lss_encode_configure_bit_timing(&f__, m->arg.raw.a, m->arg.raw.b),
+                    LSS_CS_CONFIGURE_BIT_TIMING);
         if (single_answer_ok(m, LSS_SERVICE_CONFIGURE_BIT_TIMING, "Configure Bit Timing"))
                 error_code_ok(m, LSS_SERVICE_CONFIGURE_BIT_TIMING);
         PT_END(&m->pc);
@@ -370,7 +384,7 @@ static int proc_activate_bit_timing(lss_master *m) {
 
 static int proc_store(lss_master *m) {
         PT_BEGIN(&m->pc);
-        STEP_REQUEST(m, &m->pc, lss_encode_store(&f__), LSS_CS_STORE);
+        RAW_REQUEST(m, &m->pc, lss_encode_store(&f__), LSS_CS_STORE);
         if (single_answer_ok(m, LSS_SERVICE_STORE, "Store Configuration"))
                 error_code_ok(m, LSS_SERVICE_STORE);
         PT_END(&m->pc);
@@ -381,8 +395,8 @@ static const char *const inquire_names[] = { "Inquire Vendor-ID", "Inquire Produ
 
 static int proc_inquire(lss_master *m) {
         PT_BEGIN(&m->pc);
-        STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.field),
-                     LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.field);
+        RAW_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.field),
+                    LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.field);
         if (single_answer_ok(m, LSS_SERVICE_INQUIRE, inquire_names[m->arg.inq.field])) {
                 if (m->arg.inq.field == LSS_FIELD_COUNT)
                         m->result.node_id = m->step.answer.data[1];
@@ -395,8 +409,8 @@ static int proc_inquire(lss_master *m) {
 static int proc_inquire_identity(lss_master *m) {
         PT_BEGIN(&m->pc);
         for (m->arg.inq.i = 0; m->arg.inq.i < LSS_FIELD_COUNT; m->arg.inq.i++) {
-                STEP_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.i),
-                             LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.i);
+                RAW_REQUEST(m, &m->pc, lss_encode_inquire(&f__, m->arg.inq.i),
+                            LSS_CS_INQUIRE_VENDOR + (int) m->arg.inq.i);
                 if (!single_answer_ok(m, LSS_SERVICE_INQUIRE, inquire_names[m->arg.inq.i]))
                         break;
                 lss_identity_set_field(&m->result.id, m->arg.inq.i, lss_get_u32(m->step.answer.data + 1));

@@ -205,6 +205,32 @@ START_TEST(failure_code_names) {
 END_TEST
 
 /* No slave in configuration: a confirmed service times out; a silent slave too. */
+/* A raw service's answer after the adaptive wait (the host stalled it for
+ * 150 ms, after answers of a few ms had set the waits) is still its answer:
+ * before, NoResponse (and the answer a stray in the next job). */
+START_TEST(raw_service_takes_a_stalled_answer) {
+        lss_master *m = master_default();
+        lss_slave_faults f;
+        lss_slave_faults_default(&f);
+        f.latency_us = 2000;
+        membus *b = one_slave(0x10, &f);
+        to_configuration(m, b);
+        for (int i = 0; i < 4; i++) {
+                ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_SERIAL, membus_now(b)), 0);
+                ck_assert_int_eq(run(m, b)->status, LSS_OK);
+        }
+        membus_slave(b, 0)->faults.latency_us = 150000;
+        ck_assert_int_eq(lss_master_inquire(m, LSS_FIELD_COUNT, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->node_id, 0x10);
+        ck_assert_int_eq(lss_master_store(m, membus_now(b)), 0);
+        ck_assert_msg(run(m, b)->status == LSS_OK, "%s", lss_master_result(m)->message);
+        membus_free(b);
+        lss_master_free(m);
+}
+END_TEST
+
 START_TEST(no_answer_is_never_success) {
         lss_master *m = master_default();
         membus *b = one_slave(0xFF, NULL);
@@ -805,6 +831,7 @@ int main(void) {
         tcase_add_test(tc, error_codes);
         tcase_add_test(tc, failure_code_names);
         tcase_add_test(tc, no_answer_is_never_success);
+        tcase_add_test(tc, raw_service_takes_a_stalled_answer);
         tcase_add_test(tc, two_in_configuration_conflict);
         tcase_add_test(tc, duplicate_answers_count_once);
         tcase_add_test(tc, selective_switch_ends_at_its_answer);
