@@ -202,6 +202,11 @@ typedef struct lss_scan_state {
         double prog_base0, prog_span0; /* the caller's progress frame */
         unsigned gb_try;
         bool selected;          /* this round confirmed by a selective switch (all went to waiting first) */
+        int kpc;                /* answers_in_configuration() */
+        unsigned k;
+        bool bends;             /* this round's slave answers Fastscan in configuration state: set it aside */
+        bool switched;          /* this round sent the slaves kept in configuration to waiting */
+        size_t kept_now;        /* the candidate kept this round, already in configuration; n_cand: none */
         bool misbehaving;       /* the pass ended on a slave that does not follow CiA 305 (result.id) */
         bool nobody;            /* the pass ended on a silent ping and set nobody aside (nobody got
                                  * 255 back at its end): no slave is non-configured */
