@@ -163,20 +163,15 @@ static int answers_in_configuration(lss_master *m, lss_scan_state *s) {
         PT_END(&s->kpc);
 }
 
-/* Identify Remote Slave of F's identity alone (6 frames): the confirmation
- * of a slave that is kept in configuration beside others, who would all
- * answer an inquiry. An identify answer says nothing of which request it
- * answers (a late one of the step before looks the same): the give-back
- * verifies every candidate by selective switch at the end. */
+/* Identify Remote Slave of F's identity alone: the confirmation of a slave
+ * that is kept in configuration beside others, who would all answer an
+ * inquiry. An identify answer says nothing of which request it answers (a
+ * late one of the step before looks the same): the give-back verifies every
+ * candidate by selective switch at the end. */
 static void step_identify_found(lss_master *m, const lss_scan_state *s) {
-        const uint32_t v[6] = { s->found.vendor, s->found.product, s->found.revision, s->found.revision,
-                                s->found.serial, s->found.serial };
-        step_lss(m, LSS_CS_IDENTIFY_SLAVE);
-        for (unsigned i = 0; i < 6; i++) {
-                lss_frame f;
-                lss_encode_identify_remote(&f, i, v[i]);
-                step_add_tx(m, &f);
-        }
+        const lss_identify_range r = { s->found.vendor, s->found.product, s->found.revision, s->found.revision,
+                                       s->found.serial, s->found.serial };
+        step_identify(m, &r);
         step_start(m);
 }
 

@@ -334,6 +334,9 @@ void step_event(lss_master *m, uint64_t until);
 void step_on_tx_confirmed(lss_master *m, uint64_t at);
 /* Switch state selective (4 frames), waiting for 0x44. */
 void step_selective(lss_master *m, const lss_identity *id);
+/* Identify Remote Slave for the ranges (6 frames), waiting for 0x4F: set
+ * up, step_start() follows. */
+void step_identify(lss_master *m, const lss_identify_range *r);
 /* SDO upload of 0x1000 to node_id: answered means the node-ID is taken. */
 void step_node_in_use(lss_master *m, uint8_t node_id);
 /* The same to up to LSS_MAX_TX node-IDs at once: one wait for all of them,
