@@ -180,6 +180,8 @@ static void step_identify_found(lss_master *m, const lss_scan_state *s) {
 static int keep_found(lss_scan_state *s, uint8_t node) {
         if (cand_add(s, &s->found) < 0)
                 return -ENOMEM;
+        if (lss_node_id_valid(node))
+                s->held[node] = true;
         s->cand[s->n_cand - 1].node_id = node;
         s->kept_now = s->n_cand - 1;
         s->n_kept++;
@@ -346,7 +348,9 @@ static int assign_direct(lss_master *m, lss_scan_state *s) {
         s->took = false;
         for (;;) {
                 s->dprobe = NULL;
-                if (!s->direct->choose(m, s->direct->ud, &s->found, s->back_due, &s->dprobe)) {
+                for (unsigned n = 0; n < 128; n++)
+                        s->not_free[n] = s->back_due[n] || s->held[n];
+                if (!s->direct->choose(m, s->direct->ud, &s->found, s->not_free, &s->dprobe)) {
                         if (!s->dprobe)
                                 goto out;
                         PT_CALL(&s->dpc, proc_probe(m, s->dprobe));
@@ -564,6 +568,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
                 s->next_temp = LSS_NODE_ID_MAX;
                 memset(s->back_due, 0, sizeof(s->back_due));
+                memset(s->held, 0, sizeof(s->held));
                 memset(s->temp_taken, 0, sizeof(s->temp_taken));
                 memset(s->temp_free, 0, sizeof(s->temp_free));
                 s->prog_base0 = m->prog_base;

@@ -176,7 +176,8 @@ enum lss_confirm { CONFIRM_OK, CONFIRM_NOBODY, CONFIRM_OTHER, CONFIRM_UNCLEAR };
  * given back at the end before it is selected again for the assignment. */
 typedef struct lss_enum_direct {
         /* Sets up m->as for the slave `id` and returns true; false: set it
-         * aside. `aside`: node-IDs slaves are set aside with now (never to be
+         * aside. `aside`: node-IDs slaves are set aside with now, or that slaves
+         * kept in configuration answered with (never to be
          * given). *probe set: those node-IDs are probed first, then it is
          * asked again. */
         bool (*choose)(lss_master *m, void *ud, const lss_identity *id, const bool *aside, lss_probe_state **probe);
@@ -197,6 +198,9 @@ typedef struct lss_scan_state {
                                  * (CiA 305: they take no part); one that answers again ends the pass */
         lss_device *again;      /* the candidate a round found a second time */
         bool back_due[128];     /* by temporary node-ID: set aside, not yet seen back at 255 */
+        bool held[128];         /* node-IDs slaves kept in configuration answered Inquire Node-ID with
+                                 * (a slave such as Lely's answers its pending one): never given */
+        bool not_free[128];     /* back_due or held: what s->direct may not give */
         bool temp_taken[128], temp_free[128]; /* temporary node-IDs probed: answered / silent, unused */
         lss_probe_state probe;
         double prog_base0, prog_span0; /* the caller's progress frame */
