@@ -239,9 +239,10 @@ static void scan_log(lssd_job_env *e, lssd_job *j) {
                                         "reported as SDO found it, not confirmed", e->ifname, ident, d->node_id);
                 if (d->aside_node_id)
                         lssd_log_device(LOG_INFO, e->ifname, &d->id, d->node_id,
-                                        "%s: Scan set %s aside with the volatile node-ID %u while it went on, then "
-                                        "gave it 255 back (NMT Reset Communication of node %u); node-ID now %u",
-                                        e->ifname, ident, d->aside_node_id, d->aside_node_id, d->node_id);
+                                        "%s: Scan set %s aside: it answers Fastscan in configuration state (as "
+                                        "CANopenNode's LSS slave does), so it took the volatile node-ID %u while the "
+                                        "Scan went on, then 255 back (NMT Reset Communication of node %u); node-ID "
+                                        "now %u", e->ifname, ident, d->aside_node_id, d->aside_node_id, d->node_id);
         }
 }
 

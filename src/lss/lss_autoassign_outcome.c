@@ -145,6 +145,9 @@ void aa_leave_alone(lss_aa_state *s, const lss_device *d, enum lss_outcome_kind 
         o->kind = kind;
         o->status = st;
         o->old_node_id = o->new_node_id = d->node_id;
+        /* it answered with that node-ID (pending, for a slave such as Lely's) */
+        if (lss_node_id_valid(d->node_id))
+                s->used[d->node_id] = true;
         snprintf(o->message, sizeof(o->message), "%s", why);
 }
 

@@ -25,6 +25,7 @@
  * margin (rounds_exhausted), cfg.retries failed rounds in a row, a deadline; a slave found again after it was set aside, one that confirms
  * an identity other than the one found, or a phantom found twice ends the
  * pass with LSS_E_CONFLICT naming it (result.id). */
+#include <errno.h>
 #include <inttypes.h>
 #include <string.h>
 
@@ -132,11 +133,59 @@ int proc_confirm_by_selection(lss_master *m, lss_scan_state *s) {
 static int reselect_kept(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->rpc);
         for (s->i = 0; s->i < s->n_cand; s->i++)
-                if (kept(&s->cand[s->i])) {
+                if (kept(&s->cand[s->i]) && s->i != s->kept_now) {
                         /* a silent one shows in the verification */
                         SELECT_RETRIED(m, &s->rpc, s->attempt, &s->cand[s->i].id);
                 }
         PT_END(&s->rpc);
+}
+
+/* Does F, which the last confirmation put in configuration state, answer
+ * Fastscan there? One request only F could match (its serial, with the
+ * serial as the field expected: a slave in waiting is at that field only
+ * if it matched F's vendor, product and revision, and then its serial is
+ * another), asked again while silent: a CANopenNode slave answers any
+ * Fastscan in configuration state, and a lost answer would keep it there
+ * to answer every request that follows. s->bends. */
+static int answers_in_configuration(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->kpc);
+        s->bends = false;
+        for (s->k = 0; s->k < 2 && !s->bends; s->k++) {
+                lss_frame f;
+                lss_encode_fastscan(&f, s->found.serial, 0, LSS_FIELD_SERIAL, LSS_FIELD_SERIAL);
+                step_lss(m, LSS_CS_IDENTIFY_SLAVE);
+                step_add_tx(m, &f);
+                m->step.silence_answers = true;
+                step_start(m);
+                PT_YIELD(&s->kpc);
+                s->bends = step_answered(m);
+        }
+        PT_END(&s->kpc);
+}
+
+/* Identify Remote Slave of F's identity alone: the confirmation of a slave
+ * that is kept in configuration beside others, who would all answer an
+ * inquiry. An identify answer says nothing of which request it answers (a
+ * late one of the step before looks the same): the give-back verifies every
+ * candidate by selective switch at the end. */
+static void step_identify_found(lss_master *m, const lss_scan_state *s) {
+        const lss_identify_range r = { s->found.vendor, s->found.product, s->found.revision, s->found.revision,
+                                       s->found.serial, s->found.serial };
+        step_identify(m, &r);
+        step_start(m);
+}
+
+/* F stays in configuration state, where a CiA 305 slave takes no part in
+ * Fastscan: nothing is configured into it (its node-ID is read at the end). */
+static int keep_found(lss_scan_state *s, uint8_t node) {
+        if (cand_add(s, &s->found) < 0)
+                return -ENOMEM;
+        if (lss_node_id_valid(node))
+                s->held[node] = true;
+        s->cand[s->n_cand - 1].node_id = node;
+        s->kept_now = s->n_cand - 1;
+        s->n_kept++;
+        return 0;
 }
 
 /* A volatile pending node-ID for the confirmed slave in configuration, from
@@ -278,8 +327,11 @@ static int give_back(lss_master *m, lss_scan_state *s) {
                         s->dropped++;
                 else if (master_add_device(m, &d->id, d->node_id) < 0)
                         master_fail(m, LSS_E_INCOMPLETE, "out of memory");
-                else
+                else {
                         m->devices[m->n_devices - 1].aside_node_id = d->aside_node_id;
+                        /* verified: announced, if it was not (once per identity) */
+                        master_found(m, &d->id, d->node_id, d->aside_node_id);
+                }
         }
         s->restore = false;
         PT_END(&s->vpc);
@@ -296,7 +348,9 @@ static int assign_direct(lss_master *m, lss_scan_state *s) {
         s->took = false;
         for (;;) {
                 s->dprobe = NULL;
-                if (!s->direct->choose(m, s->direct->ud, &s->found, s->back_due, &s->dprobe)) {
+                for (unsigned n = 0; n < 128; n++)
+                        s->not_free[n] = s->back_due[n] || s->held[n];
+                if (!s->direct->choose(m, s->direct->ud, &s->found, s->not_free, &s->dprobe)) {
                         if (!s->dprobe)
                                 goto out;
                         PT_CALL(&s->dpc, proc_probe(m, s->dprobe));
@@ -338,9 +392,30 @@ static void misbehaving(lss_master *m, lss_scan_state *s, const lss_identity *id
 static int handle_found(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->hpc);
         s->cpc = 0;
-        s->selected = s->took = false;
+        s->selected = s->took = s->switched = false;
+        s->kept_now = SIZE_MAX;
+        /* Only a slave that answers Fastscan in configuration state needs
+         * setting aside with a node-ID; any other stays there, untouched */
+        s->kpc = 0;
+        PT_CALL(&s->hpc, answers_in_configuration(m, s));
+        if (!s->bends && !s->direct && s->n_kept > 0 && !found_before(s, &s->found)) {
+                /* the slaves kept would answer an inquiry too: F's own identify */
+                STEP_RETRIED(m, &s->hpc, s->attempt, step_identify_found(m, s));
+                if (step_answered(m)) {
+                        if (keep_found(s, LSS_NODE_ID_UNCONFIGURED) < 0) {
+                                master_fail(m, LSS_E_INCOMPLETE, "out of memory");
+                                goto out;
+                        }
+                        s->confirm = CONFIRM_OK;
+                        s->last_found = s->found;
+                        /* it answered Fastscan: non-configured, as far as CiA 305 goes */
+                        master_found(m, &s->found, LSS_NODE_ID_UNCONFIGURED, 0);
+                        goto out;
+                }
+                /* a slave without identify services, or nobody: by selection */
+        }
         if (s->n_kept == 0)
-                PT_CALL(&s->hpc, proc_confirm_found(m, s, !s->no_set_aside));
+                PT_CALL(&s->hpc, proc_confirm_found(m, s, !s->no_set_aside && (s->bends || s->direct)));
         if (s->confirm == CONFIRM_OTHER) {
                 /* Another identity answered. Two compliant slaves in
                  * configuration do that when one went there on a confirmation
@@ -359,7 +434,8 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 lss_timing_on_stray(&m->timing);
                 s->confirm = CONFIRM_UNCLEAR;
         }
-        if (s->n_kept > 0 || s->confirm == CONFIRM_UNCLEAR || (s->confirm == CONFIRM_OK && !s->no_set_aside)) {
+        if (s->n_kept > 0 || s->confirm == CONFIRM_UNCLEAR ||
+            (s->confirm == CONFIRM_OK && !s->no_set_aside && (s->bends || s->direct))) {
                 /* another slave in configuration too (one that went there
                  * early, or kept): the selective switch singles F out. Also
                  * before F may be set aside: a second slave in configuration
@@ -367,6 +443,7 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                  * would take the temporary node-ID with F, and keep it. */
                 s->cpc = 0;
                 PT_CALL(&s->hpc, proc_confirm_by_selection(m, s));
+                s->switched = true;
         }
         if (s->confirm == CONFIRM_OK) {
                 REQUEST_RETRIED(m, &s->hpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
@@ -386,10 +463,13 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                         misbehaving(m, s, &s->found, s->no_set_aside
                                     ? "answers Fastscan in configuration state (a dry run sets nobody aside "
                                       "with a temporary node-ID, which such a slave needs)"
-                                    : "answered Fastscan again after it was set aside");
+                                    : kept(s->again) ? "answered Fastscan again in configuration state, where it "
+                                                       "was silent to it before"
+                                                     : "answered Fastscan again after it was set aside");
                         goto out;
                 }
                 s->again->node_id = s->node;
+                s->kept_now = (size_t) (s->again - s->cand);
                 s->n_kept++;
                 goto reselect;
         }
@@ -419,31 +499,30 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 s->phantom = s->found;
         } else if (s->confirm == CONFIRM_UNCLEAR) {
                 SEND(m, &s->hpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
-        } else if (s->node != LSS_NODE_ID_UNCONFIGURED) {
-                /* configured, yet it took part: leave it in configuration */
-                if (cand_add(s, &s->found) < 0) {
+                s->switched = true;
+        } else if (s->node != LSS_NODE_ID_UNCONFIGURED || s->no_set_aside) {
+                /* configured, yet it took part; or a dry run, which configures
+                 * nothing, not even a temporary node-ID: leave it in configuration */
+                if (keep_found(s, s->node) < 0) {
                         master_fail(m, LSS_E_INCOMPLETE, "out of memory");
                         goto out;
                 }
-                s->cand[s->n_cand - 1].node_id = s->node;
-                s->n_kept++;
-        } else if (s->no_set_aside) {
-                /* a dry run configures nothing, not even a temporary node-ID */
-                if (cand_add(s, &s->found) < 0) {
-                        master_fail(m, LSS_E_INCOMPLETE, "out of memory");
-                        goto out;
-                }
-                s->cand[s->n_cand - 1].node_id = LSS_NODE_ID_UNCONFIGURED;
-                s->n_kept++;
         } else {
                 if (s->direct) {
                         s->dpc = 0;
                         PT_CALL(&s->hpc, assign_direct(m, s));
+                        s->switched = s->switched || s->took;
                 }
-                if (!s->took) {
+                if (!s->took && !s->bends) {
+                        if (keep_found(s, LSS_NODE_ID_UNCONFIGURED) < 0) {
+                                master_fail(m, LSS_E_INCOMPLETE, "out of memory");
+                                goto out;
+                        }
+                } else if (!s->took) {
                         s->apc = 0;
                         s->restore = true;
                         PT_CALL(&s->hpc, set_aside(m, s));
+                        s->switched = true;
                         if (m->result.status != LSS_OK)
                                 goto out;
                 }
@@ -453,18 +532,18 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 /* confirmed by its own answers and now a candidate: tell the
                  * caller at once (a slave set aside gets 255 back at the end) */
                 master_found(m, &s->found, s->node, s->took ? 0 : s->cand[s->n_cand - 1].aside_node_id);
+                s->switched = s->switched || s->took;
         }
 reselect:
         /* Kept ones were let go by a switch to waiting in this round: the
-         * selection (whenever one was kept before), an unclear round, or
-         * setting a slave aside or giving it its node-ID. Only the first
-         * kept one found by inquiry saw no switch. */
-        if (s->n_kept > 0 && (s->n_kept > 1 || s->confirm != CONFIRM_OK || s->node == LSS_NODE_ID_UNCONFIGURED ||
-                              s->selected)) {
+         * selection, an unclear round, or setting a slave aside or giving it
+         * its node-ID (the one kept this round is in configuration). */
+        if (s->n_kept > 0 && s->switched) {
                 s->rpc = 0;
                 PT_CALL(&s->hpc, reselect_kept(m, s));
         }
-out:;
+out:
+        s->kept_now = SIZE_MAX; /* a later switch to waiting lets this one go too */
         PT_END(&s->hpc);
 }
 
@@ -489,6 +568,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
                 s->next_temp = LSS_NODE_ID_MAX;
                 memset(s->back_due, 0, sizeof(s->back_due));
+                memset(s->held, 0, sizeof(s->held));
                 memset(s->temp_taken, 0, sizeof(s->temp_taken));
                 memset(s->temp_free, 0, sizeof(s->temp_free));
                 s->prog_base0 = m->prog_base;

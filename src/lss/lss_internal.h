@@ -176,7 +176,8 @@ enum lss_confirm { CONFIRM_OK, CONFIRM_NOBODY, CONFIRM_OTHER, CONFIRM_UNCLEAR };
  * given back at the end before it is selected again for the assignment. */
 typedef struct lss_enum_direct {
         /* Sets up m->as for the slave `id` and returns true; false: set it
-         * aside. `aside`: node-IDs slaves are set aside with now (never to be
+         * aside. `aside`: node-IDs slaves are set aside with now, or that slaves
+         * kept in configuration answered with (never to be
          * given). *probe set: those node-IDs are probed first, then it is
          * asked again. */
         bool (*choose)(lss_master *m, void *ud, const lss_identity *id, const bool *aside, lss_probe_state **probe);
@@ -197,11 +198,19 @@ typedef struct lss_scan_state {
                                  * (CiA 305: they take no part); one that answers again ends the pass */
         lss_device *again;      /* the candidate a round found a second time */
         bool back_due[128];     /* by temporary node-ID: set aside, not yet seen back at 255 */
+        bool held[128];         /* node-IDs slaves kept in configuration answered Inquire Node-ID with
+                                 * (a slave such as Lely's answers its pending one): never given */
+        bool not_free[128];     /* back_due or held: what s->direct may not give */
         bool temp_taken[128], temp_free[128]; /* temporary node-IDs probed: answered / silent, unused */
         lss_probe_state probe;
         double prog_base0, prog_span0; /* the caller's progress frame */
         unsigned gb_try;
         bool selected;          /* this round confirmed by a selective switch (all went to waiting first) */
+        int kpc;                /* answers_in_configuration() */
+        unsigned k;
+        bool bends;             /* this round's slave answers Fastscan in configuration state: set it aside */
+        bool switched;          /* this round sent the slaves kept in configuration to waiting */
+        size_t kept_now;        /* the candidate kept this round, already in configuration; n_cand: none */
         bool misbehaving;       /* the pass ended on a slave that does not follow CiA 305 (result.id) */
         bool nobody;            /* the pass ended on a silent ping and set nobody aside (nobody got
                                  * 255 back at its end): no slave is non-configured */
@@ -329,6 +338,9 @@ void step_event(lss_master *m, uint64_t until);
 void step_on_tx_confirmed(lss_master *m, uint64_t at);
 /* Switch state selective (4 frames), waiting for 0x44. */
 void step_selective(lss_master *m, const lss_identity *id);
+/* Identify Remote Slave for the ranges (6 frames), waiting for 0x4F: set
+ * up, step_start() follows. */
+void step_identify(lss_master *m, const lss_identify_range *r);
 /* SDO upload of 0x1000 to node_id: answered means the node-ID is taken. */
 void step_node_in_use(lss_master *m, uint8_t node_id);
 /* The same to up to LSS_MAX_TX node-IDs at once: one wait for all of them,

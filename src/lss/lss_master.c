@@ -420,17 +420,8 @@ static int proc_inquire_identity(lss_master *m) {
 
 static int proc_identify_remote(lss_master *m) {
         PT_BEGIN(&m->pc);
-        step_lss(m, LSS_CS_IDENTIFY_SLAVE);
+        step_identify(m, &m->arg.ir);
         m->step.discovery = true;
-        {
-                const lss_identify_range *r = &m->arg.ir;
-                const uint32_t v[6] = { r->vendor, r->product, r->rev_lo, r->rev_hi, r->serial_lo, r->serial_hi };
-                for (unsigned i = 0; i < 6; i++) {
-                        lss_frame f;
-                        lss_encode_identify_remote(&f, i, v[i]);
-                        step_add_tx(m, &f);
-                }
-        }
         step_start(m);
         PT_YIELD(&m->pc);
         m->result.found = step_answered(m);

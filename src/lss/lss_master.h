@@ -207,7 +207,10 @@ void lss_master_set_taken_check(lss_master *m, lss_taken_fn fn, void *userdata);
  * nobody confirms. Called at most once per identity per operation (a pass
  * that is run again does not repeat it), also in the enumerations and
  * slowscans of AutoAssign. `d->node_id` is what the result will say (255 for
- * a slave set aside: it gets 255 back); the result can still leave out a
+ * a slave set aside: it gets 255 back), but for a slave kept in configuration
+ * beside others, which cannot be asked its node-ID there: 255, as CiA 305
+ * has only non-configured slaves answer Fastscan (one that answers it with a
+ * node-ID, such as Lely's, has that in the result); the result can still leave out a
  * device announced here when it fails the final verification (e.g. it left
  * the bus). Called from inside lss_master_on_frame/on_time/start: do not
  * start or cancel operations from it. */
@@ -245,12 +248,15 @@ int lss_master_nmt(lss_master *m, enum nmt_cs cs, uint8_t node_id, uint64_t now)
 
 /* ---- procedures ---- */
 /* Every non-configured slave by fastscan, nothing assigned; all back in
- * waiting (lss_enumerate.c). Each slave found is confirmed by inquiry and
- * set aside before the next round with a volatile pending node-ID from the
- * top of the range that no device answers to (slaves such as CANopenNode's
- * keep answering Fastscan in configuration state); at the end, also on
- * failure or cancel, each gets 255 back, NMT Reset Communication, and is
- * verified by inquiry (result devices[].aside_node_id). The pass ends when
+ * waiting (lss_enumerate.c). Each slave found stays in configuration state,
+ * where a CiA 305 slave takes no part in Fastscan, confirmed by inquiry (by
+ * Identify Remote Slave of its identity while others are kept there too);
+ * only one that answers Fastscan in configuration state (CANopenNode's:
+ * one request only it could match tells) is set aside before the next round
+ * with a volatile pending node-ID from the top of the range that no device
+ * answers to, and at the end, also on failure or cancel, gets 255 back and
+ * NMT Reset Communication (result devices[].aside_node_id). Every slave
+ * found is verified by selective switch and Inquire Node-ID at the end. The pass ends when
  * more rounds found nobody new than found a slave (plus a margin), or
  * at its deadline (lss_enumerate_deadline_us), and a slave that answers for
  * identities not its own (found twice, or confirming another identity) ends

@@ -80,15 +80,10 @@ static void drop(lss_scan_state *s) {
                 s->dropped_id = s->cand[s->n_cand - 1].id;
 }
 
-/* Identify Remote Slave for one range (6 frames), waiting for 0x4F. */
-static void step_identify(lss_master *m, const lss_scan_state *s, const lss_range_item *it) {
-        const uint32_t v[6] = { s->range.vendor, s->range.product, it->rlo, it->rhi, it->slo, it->shi };
-        step_lss(m, LSS_CS_IDENTIFY_SLAVE);
-        for (unsigned i = 0; i < 6; i++) {
-                lss_frame f;
-                lss_encode_identify_remote(&f, i, v[i]);
-                step_add_tx(m, &f);
-        }
+/* Identify Remote Slave for one range item. */
+static void step_identify_item(lss_master *m, const lss_scan_state *s, const lss_range_item *it) {
+        const lss_identify_range r = { s->range.vendor, s->range.product, it->rlo, it->rhi, it->slo, it->shi };
+        step_identify(m, &r);
         step_start(m);
 }
 
@@ -105,7 +100,7 @@ static int verify_candidate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->vpc);
         SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->n_cand - 1].id);
         if (!step_answered(m)) {
-                STEP_RETRIED(m, &s->vpc, s->attempt, step_identify(m, s, &s->cur));
+                STEP_RETRIED(m, &s->vpc, s->attempt, step_identify_item(m, s, &s->cur));
                 if (!step_answered(m)) {
                         s->n_cand--;
                         goto out;
@@ -201,7 +196,7 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
 again:
         while (s->n_stack > 0) {
                 s->cur = s->stack[--s->n_stack];
-                step_identify(m, s, &s->cur);
+                step_identify_item(m, s, &s->cur);
                 m->step.discovery = s->i++ == 0;
                 PT_YIELD(&s->pc);
                 if (!step_answered(m) && (s->cur.gap || s->cur.confirm)) {

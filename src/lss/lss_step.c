@@ -33,6 +33,16 @@ void step_selective(lss_master *m, const lss_identity *id) {
         step_start(m);
 }
 
+void step_identify(lss_master *m, const lss_identify_range *r) {
+        const uint32_t v[6] = { r->vendor, r->product, r->rev_lo, r->rev_hi, r->serial_lo, r->serial_hi };
+        step_lss(m, LSS_CS_IDENTIFY_SLAVE);
+        for (unsigned i = 0; i < 6; i++) {
+                lss_frame f;
+                lss_encode_identify_remote(&f, i, v[i]);
+                step_add_tx(m, &f);
+        }
+}
+
 /* Every CANopen device has an SDO server: an expedited upload request of
  * object 0x1000 (device type) to a node-ID is answered by whoever has it. */
 void step_nodes_in_use(lss_master *m, const uint8_t *ids, unsigned n) {

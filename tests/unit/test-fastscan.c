@@ -574,18 +574,28 @@ END_TEST
 START_TEST(enumerate_127) { enumerate_n(127, 7, false); enumerate_n(127, 8, true); }
 END_TEST
 
+/* Inquire Vendor..Serial by field, then Identify Remote Slave (its last
+ * frame) and Configure Node-ID. */
 static void count_identity_inquiries(void *ud, const lss_frame *f, uint64_t t) {
         unsigned *by_field = ud;
-        if (lss_is_request(f) && f->data[0] >= LSS_CS_INQUIRE_VENDOR && f->data[0] <= LSS_CS_INQUIRE_VENDOR + 3)
+        (void) t;
+        if (!lss_is_request(f))
+                return;
+        if (f->data[0] >= LSS_CS_INQUIRE_VENDOR && f->data[0] <= LSS_CS_INQUIRE_VENDOR + 3)
                 by_field[f->data[0] - LSS_CS_INQUIRE_VENDOR]++;
+        by_field[LSS_FIELD_COUNT] += f->data[0] == LSS_CS_IDENTIFY_SERIAL_HIGH;
+        by_field[LSS_FIELD_COUNT + 1] += f->data[0] == LSS_CS_CONFIGURE_NODE_ID;
 }
 
-/* A find is singled out by a selective switch for its whole identity before
- * it is set aside: the inquiry before asks only the serial (the field finds
- * differ in) when it is the find's. Before, all four fields. */
-START_TEST(find_confirmed_by_its_serial) {
+/* Finds are kept in configuration state, untouched: the first, alone
+ * there, confirms its identity by inquiry (all four fields: no selective
+ * switch follows); each later one beside the kept ones by Identify Remote
+ * Slave of its own identity (six frames), with no selective switch. Before,
+ * each was singled out by a selective switch and set aside with a
+ * temporary node-ID. */
+START_TEST(finds_kept_in_configuration) {
         membus *b = bus_random(8, 41, 0, 0, NULL);
-        unsigned by_field[LSS_FIELD_COUNT] = { 0 };
+        unsigned by_field[LSS_FIELD_COUNT + 2] = { 0 };
         membus_set_trace(b, count_identity_inquiries, by_field);
         lss_master *m = master_default();
         ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
@@ -593,8 +603,12 @@ START_TEST(find_confirmed_by_its_serial) {
         ck_assert_int_eq(r->status, LSS_OK);
         ck_assert_uint_eq(r->n_devices, 8);
         assert_devices_real(b, r);
-        ck_assert_uint_eq(by_field[LSS_FIELD_SERIAL], 8);
-        ck_assert_uint_eq(by_field[LSS_FIELD_VENDOR] + by_field[LSS_FIELD_PRODUCT] + by_field[LSS_FIELD_REVISION], 0);
+        for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
+                ck_assert_uint_eq(by_field[i], 1);
+        ck_assert_uint_eq(by_field[LSS_FIELD_COUNT], 7);     /* identify, its last frame */
+        ck_assert_uint_eq(by_field[LSS_FIELD_COUNT + 1], 0); /* Configure Node-ID */
+        for (size_t i = 0; i < 8; i++)
+                ck_assert_uint_eq(r->devices[i].aside_node_id, 0);
         lss_master_free(m);
         membus_free(b);
 }
@@ -931,7 +945,7 @@ int main(void) {
         tcase_add_test(tc, enumerate_32);
         tcase_add_test(tc, enumerate_127);
         tcase_add_test(tc, enumerate_skips_configured);
-        tcase_add_test(tc, find_confirmed_by_its_serial);
+        tcase_add_test(tc, finds_kept_in_configuration);
         tcase_add_test(tc, last_looks_wait_as_answered_steps);
         tcase_add_test(tc, enumerate_without_identify);
         tcase_add_test(tc, enumerate_refused_temporary);

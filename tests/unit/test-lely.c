@@ -140,6 +140,39 @@ START_TEST(pool_pass_mixed) {
 }
 END_TEST
 
+/* A pass that does not know a Lely device holds a pool node-ID for its next
+ * reset (lssd restarted since the pass that gave it): found first (the
+ * lowest identity: Fastscan reads bits 0 first), it answers Inquire Node-ID
+ * with it, and no device found after it is given that node-ID (before: 71
+ * to the next device found, two devices holding 71). One found before it
+ * may be: lssd(8) says so. */
+START_TEST(pending_pool_id_not_given_again) {
+        lss_autoassign_plan p = { .unknown = LSS_UNKNOWN_POOL, .pool_lo = 71, .pool_hi = 90, .store = true };
+        for (uint64_t seed = 1; seed <= SEEDS; seed++) {
+                membus *b = membus_new(125000);
+                membus_set_seed(b, seed);
+                uint64_t r = seed;
+                for (uint32_t i = 0; i < 4; i++) {
+                        lss_identity id = { i == 0 ? 0x100 : 0x200, 0xB0B, 1, (uint32_t) sim_random_next(&r) };
+                        lss_slave_faults f = faults_of(i == 0 ? LELY : PLAIN, &r);
+                        membus_add_slave(b, &id, LSS_NODE_ID_UNCONFIGURED, &f);
+                }
+                lss_slave_state *held = &membus_slave(b, 0)->st;
+                held->pending_node_id = held->stored_node_id = 71;
+                lss_master *m = master_default();
+                const lss_result *res = run_pass(m, b, &p);
+                ck_assert_msg(res->status == LSS_OK, "seed %llu: %s", (unsigned long long) seed, res->message);
+                for (size_t i = 1; i < 4; i++) {
+                        const lss_slave_state *st = &membus_slave(b, i)->st;
+                        ck_assert_msg(st->pending_node_id != 71 && st->stored_node_id != 71,
+                                      "seed %llu: slave %zu given 71, which slave 0 holds", (unsigned long long) seed, i);
+                }
+                ck_assert_uint_eq(held->pending_node_id, 71);
+                pass_free(m, b);
+        }
+}
+END_TEST
+
 /* SetBitrate with a Lely device (13 01 without a rate hook): refused, the
  * device named by its outcome, nothing activated, every rate as it was. */
 START_TEST(bitrate_refused_by_lely) {
@@ -170,6 +203,7 @@ static void add(TCase *tc) {
         tcase_add_test(tc, scan_lely);
         tcase_add_test(tc, scan_mixed);
         tcase_add_test(tc, pool_pass_mixed);
+        tcase_add_test(tc, pending_pool_id_not_given_again);
         tcase_add_test(tc, bitrate_refused_by_lely);
 }
 
