@@ -58,6 +58,9 @@ typedef struct lss_step {
         bool ends_at_answer;   /* the first answer is the only one that can come (or all
                                 * are the same): no answer guard (lss_step.c) */
         bool watch_early;      /* a step after one nobody answered: judge `early` */
+        bool stale_is_answer;  /* (watch_early) the step before's late answer is this one's: the
+                                * same request, and its slave acted on it (a selective switch:
+                                * it is in configuration now, deaf to the request asked again) */
 
         enum step_phase phase;
         uint64_t sent_at, tx_us, first_at, end_at;

@@ -25,6 +25,9 @@ void step_selective(lss_master *m, const lss_identity *id) {
         /* its answer says nothing but "here" (cs 0x44, the rest reserved): a
          * second slave's would be the same frame and count once */
         m->step.ends_at_answer = true;
+        /* asked again, the slave that answered the ask before late is in
+         * configuration and ignores this one: that answer is the answer */
+        m->step.stale_is_answer = true;
         for (unsigned i = 0; i < LSS_FIELD_COUNT; i++) {
                 lss_frame f;
                 lss_encode_switch_selective(&f, i, lss_identity_field(id, i));
@@ -162,8 +165,16 @@ void step_on_stray(lss_master *m, const lss_frame *f) {
                 return;
         }
         /* before this step's request was out: the step before's, late */
-        if (m->step.watch_early && step_matches(&m->step, f))
+        if (m->step.watch_early && step_matches(&m->step, f)) {
                 m->step.stale_answer = true;
+                if (m->step.stale_is_answer && m->step.n_answers == 0 && m->step.phase == PHASE_WAIT) {
+                        m->step.answer = *f;
+                        m->step.n_answers = m->step.n_frames = 1;
+                        m->step.first_at = m->now;
+                        m->step.late = true;
+                        m->step.phase = PHASE_DONE;
+                }
+        }
         m->stats.stray_answers++;
         /* One stall of the host delays every answer it holds: a crowded
          * step's come late together, and each doubling the waits took a

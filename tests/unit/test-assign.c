@@ -344,6 +344,50 @@ START_TEST(configure_node_id_checked) {
 }
 END_TEST
 
+/* Delays the slave's answer to the n-th selective switch (its serial frame). */
+typedef struct late_select {
+        lss_slave *slave;
+        unsigned n, seen;
+        uint32_t late_us, normal_us;
+} late_select;
+
+static void late_select_trace(void *ud, const lss_frame *f, uint64_t t) {
+        late_select *l = ud;
+        (void) t;
+        if (lss_is_request(f) && f->data[0] == LSS_CS_SWITCH_SEL_SERIAL)
+                l->slave->faults.latency_us = ++l->seen == l->n ? l->late_us : l->normal_us;
+}
+
+/* The answer to a selective switch comes after the step ended and before
+ * the switch asked again is out (a loaded host): the slave is in
+ * configuration, where it ignores the switch asked again. That late answer
+ * is the answer (before: three more asks nobody answered, "no slave
+ * answered the selective switch" — the false "unreachable" of SetBitrate's
+ * first step and "answered identify but not the selective switch"). */
+START_TEST(select_answered_before_the_retry_is_out) {
+        lss_slave_faults f = faults_latency(1000, 0);
+        membus *b = membus_new(125000);
+        membus_add_slave(b, &ID1, 5, &f);
+        late_select l = { .slave = membus_slave(b, 0), .n = 4, .late_us = 4000, .normal_us = 1000 };
+        membus_set_trace(b, late_select_trace, &l);
+        lss_master *m = master_default();
+        /* three selections measure the bus: ~1 ms answers, a wait of ~2 ms */
+        for (int i = 0; i < 3; i++) {
+                ck_assert_int_eq(lss_master_switch_selective(m, &ID1, membus_now(b)), 0);
+                ck_assert_int_eq(run(m, b)->status, LSS_OK);
+                ck_assert_int_eq(lss_master_switch_global(m, LSS_MODE_WAITING, membus_now(b)), 0);
+                run(m, b);
+        }
+        ck_assert_int_eq(lss_master_assign(m, &ID1, 5, LSS_ASSIGN_STORE | LSS_ASSIGN_VERIFY, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->node_id, 5);
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 static void fastscan_assign_all(size_t n, uint64_t seed, bool known, unsigned every_late) {
         lss_slave_faults f = faults_latency(1000, 300);
         membus *b = bus_random(n, seed, known ? 0xEC : 0, known ? 0x1234 : 0, &f);
@@ -680,6 +724,7 @@ int main(void) {
         tcase_add_test(tc, assign_duplicate_identity);
         tcase_add_test(tc, assign_refuses_taken_node_id);
         tcase_add_test(tc, configure_node_id_checked);
+        tcase_add_test(tc, select_answered_before_the_retry_is_out);
         tcase_add_test(tc, fastscan_assign_8);
         tcase_add_test(tc, fastscan_assign_32);
         tcase_add_test(tc, fastscan_assign_early_config);
