@@ -26,6 +26,7 @@ typedef struct ctl_context {
         bool as_config;             /* scan: print the found devices as lssd.conf(5) buses */
         bool global;                /* set-bitrate: SetBitrate option global */
         bool no_sdo;                /* scan: LSS only, no SDO discovery (Scan option sdo false) */
+        bool no_ask_password;       /* no polkit agent, no interactive authorization */
         bool has_delay;
         uint16_t delay_ms;
         bool has_vendor, has_product;
