@@ -348,10 +348,16 @@ int lssd_auth_check(lssd_auth *a, sd_bus_message *m, lssd_action action, sd_bus_
                 if (q->m == m && q->action == action) {
                         if (!q->done)
                                 return 1;
-                        if (q->result == 0)
-                                return 0;
-                        r = sd_bus_error_copy(error, &q->error);
-                        return r < 0 ? r : -EACCES;
+                        /* the call came again: its answer, used once (what no call
+                         * comes for, e.g. an object gone meanwhile, goes when idle) */
+                        r = q->result;
+                        if (r < 0) {
+                                r = sd_bus_error_copy(error, &q->error);
+                                if (r >= 0)
+                                        r = -EACCES;
+                        }
+                        query_free(q);
+                        return r;
                 }
 
         if (!sender)

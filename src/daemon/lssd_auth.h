@@ -10,8 +10,8 @@
  * asks the bus daemon for the caller's credentials and then polkit, both
  * asynchronously, and tells the handler to return (1); with the answer in,
  * the call is dispatched again (sd_bus_enqueue_for_read()), the handler
- * runs from the start and lssd_auth_check() returns the kept answer. The
- * answer is dropped once the loop is idle again. Credentials come from the
+ * runs from the start and lssd_auth_check() returns the kept answer, once;
+ * an answer no call comes back for is dropped once the loop is idle. Credentials come from the
  * bus daemon (GetConnectionCredentials: SO_PEERCRED, SO_PEERGROUPS at
  * connect time), never from /proc: sd-bus's augmented credentials describe
  * whatever the sender's PID is now, not who sent the message. polkit gets
@@ -63,7 +63,7 @@ typedef struct lssd_auth {
         uint64_t timeout_usec;    /* polkit's time to answer (LSSD_AUTH_TIMEOUT_USEC) */
         uint64_t interactive_timeout_usec;
         unsigned fallback_notes;  /* "polkit is not available" lines logged (one) */
-        lssd_auth_query *queries; /* asked or answered, until the loop is idle again */
+        lssd_auth_query *queries; /* asked, or answered and not yet used */
 } lssd_auth;
 
 /* Looks up user and group `lssd` (absent = root only without polkit). */

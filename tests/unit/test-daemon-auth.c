@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <systemd/sd-bus.h>
@@ -145,6 +146,7 @@ typedef struct world {
         lssd_auth auth;
         polkit_mode mode;
         unsigned handler_runs, allowed_runs, polkit_calls;
+        bool kept_after_answer;
         /* what the fake polkit was asked */
         char subject_kind[32], action_id[64];
         uint32_t pid, flags;
@@ -154,6 +156,7 @@ typedef struct world {
 } world;
 
 static world w;
+static unsigned answers_in; /* answers of the running test, in order */
 
 static uint64_t own_start_time(void) {
         char buf[1024], *save = NULL;
@@ -176,6 +179,8 @@ static int method_do(sd_bus_message *m, void *userdata, sd_bus_error *error) {
                 return r;
         w.handler_runs++;
         r = lssd_auth_check(&w.auth, m, (lssd_action) action, error);
+        if (r != 1) /* the answer: used, not kept */
+                w.kept_after_answer = w.auth.queries != NULL;
         if (r != 0)
                 return r;
         w.allowed_runs++;
@@ -264,6 +269,7 @@ static void world_up(polkit_mode mode) {
         FILE *f;
 
         memset(&w, 0, sizeof(w));
+        answers_in = 0;
         w.mode = mode;
         snprintf(w.dir, sizeof(w.dir), "/tmp/lssd-auth-test.XXXXXX");
         ck_assert_ptr_nonnull(mkdtemp(w.dir));
@@ -291,6 +297,8 @@ static void world_up(polkit_mode mode) {
         if (w.dbus_daemon == 0) {
                 char arg[192], fd_arg[32];
                 close(ready[0]);
+                /* gone with the test, even one that failed half-way */
+                prctl(PR_SET_PDEATHSIG, SIGTERM);
                 snprintf(arg, sizeof(arg), "--config-file=%s", conf);
                 snprintf(fd_arg, sizeof(fd_arg), "--print-address=%d", ready[1]);
                 execlp("dbus-daemon", "dbus-daemon", "--nofork", "--nopidfile", arg, fd_arg, (char *) NULL);
@@ -347,8 +355,6 @@ typedef struct answer {
         uint64_t at;    /* CLOCK_MONOTONIC, µs */
         char name[128], message[512];
 } answer;
-
-static unsigned answers_in;
 
 static int on_answer(sd_bus_message *reply, void *userdata, sd_bus_error *error) {
         answer *a = userdata;
@@ -413,7 +419,8 @@ START_TEST(polkit_yes) {
         ck_assert_uint_eq(w.start_time, own_start_time());
         ck_assert_uint_ne(w.start_time, 0);
         ck_assert_uint_eq(w.flags, 0);
-        /* the answer was dropped once the loop was idle */
+        /* the answer was used once and dropped */
+        ck_assert(!w.kept_after_answer);
         ck_assert_ptr_null(w.auth.queries);
         world_down();
 }
@@ -424,6 +431,7 @@ START_TEST(polkit_no) {
         answer a = call(LSSD_ACTION_ASSIGN, false);
         expect_refused(&a, SD_BUS_ERROR_ACCESS_DENIED, LSSD_ACTION_ASSIGN);
         ck_assert_uint_eq(w.handler_runs, 2);
+        ck_assert(!w.kept_after_answer);
         ck_assert_ptr_null(w.auth.queries);
         world_down();
 }
