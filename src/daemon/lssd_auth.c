@@ -134,8 +134,9 @@ static int on_cleanup(sd_event_source *s, void *userdata) {
         return 0;
 }
 
-/* The answer is in: keep it, dispatch the call again, drop the answer once
- * the loop is idle (after the call ran again). */
+/* The answer is in: keep it and dispatch the call again, which uses it
+ * (lssd_auth_check()); should the call not come back to us (its object
+ * went away meanwhile), the answer goes once the loop is idle. */
 static void finish(lssd_auth_query *q, int result, const sd_bus_error *error) {
         sd_bus *bus = sd_bus_message_get_bus(q->m);
         int r;
