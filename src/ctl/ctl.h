@@ -27,6 +27,7 @@ typedef struct ctl_context {
         const char *as_dcf;         /* scan: write a DCF fragment per device found into this folder */
         bool global;                /* set-bitrate: SetBitrate option global */
         bool no_sdo;                /* scan: LSS only, no SDO discovery (Scan option sdo false) */
+        bool no_ask_password;       /* no polkit agent, no interactive authorization */
         bool has_delay;
         uint16_t delay_ms;
         bool has_vendor, has_product;

@@ -67,6 +67,10 @@ int ctl_connect(ctl_context *c) {
         if (r < 0)
                 return ctl_fail(c, CTL_EXIT_NOT_RUNNING, r,
                                 "Failed to connect to the system bus (%s): lssd is not running.", strerror(-r));
+        /* polkit may ask the caller for a password (the agent of ctl_agent.h) */
+        r = sd_bus_set_allow_interactive_authorization(c->bus, !c->no_ask_password);
+        if (r < 0)
+                return ctl_fail(c, CTL_EXIT_FAILURE, r, "Failed to allow interactive authorization: %s", strerror(-r));
         return 0;
 }
 

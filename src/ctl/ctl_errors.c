@@ -10,8 +10,9 @@ static const ctl_error_info ctl_error_table[] = {
         LSSD_ERRORS(CTL_ERROR_ENTRY)
         /* the standard names lssd replies with, and the bus daemon's */
         { SD_BUS_ERROR_INVALID_ARGS, CTL_EXIT_USAGE, "invalid argument" },
-        { SD_BUS_ERROR_ACCESS_DENIED, CTL_EXIT_ACCESS_DENIED,
-          "permission denied: lssd allows this to root and group 'lssd' (usermod -aG lssd USER, then log in again)" },
+        { SD_BUS_ERROR_ACCESS_DENIED, CTL_EXIT_ACCESS_DENIED, "permission denied" },
+        { SD_BUS_ERROR_INTERACTIVE_AUTHORIZATION_REQUIRED, CTL_EXIT_ACCESS_DENIED,
+          "authentication required (lssctl asks on a terminal, unless --no-ask-password)" },
         { LSSD_ERROR_INVALID_FILE_CONTENT, CTL_EXIT_BAD_CONFIG,
           "the configuration file is invalid; lssd keeps the previous one" },
         { SD_BUS_ERROR_SERVICE_UNKNOWN, CTL_EXIT_NOT_RUNNING, "lssd is not running" },

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "ctl/ctl.h"
+#include "ctl/ctl_agent.h"
 #include "ctl/ctl_errors.h"
 #include "ctl/ctl_pager.h"
 #include "ctl/ctl_parse.h"
@@ -39,28 +40,28 @@ typedef struct verb {
         int min_args, max_args; /* -1: any */
         unsigned options;
         bool pager;             /* output may go through the pager */
+        bool polkit;            /* lssd asks polkit: the text agent comes along (ctl_agent.h) */
         int (*run)(ctl_context *c);
 } verb;
 
 static const verb verbs[] = {
-        { "status", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER, true, verb_status },
-        { "list", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND, true, verb_list },
+        { "status", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER, true, false, verb_status },
+        { "list", 0, 0, OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND, true, false, verb_list },
         { "scan", 0, 0,
           OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_VENDOR | OPT_AS_CONFIG | OPT_NO_SDO | OPT_AS_DCF,
-          false, verb_scan },
-        { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false,
+          false, true, verb_scan },
+        { "assign", 2, 2, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_NO_VERIFY | OPT_FORCE | OPT_QUIET, false, true,
           verb_assign },
-        { "unassign", 1, 1, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_RESET | OPT_QUIET, false, verb_unassign },
+        { "unassign", 1, 1, OPT_BUS | OPT_JSON | OPT_NO_STORE | OPT_RESET | OPT_QUIET, false, true, verb_unassign },
         { "auto-assign", 0, 0,
-          OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE | OPT_QUIET | OPT_DRY_RUN, false,
+          OPT_BUS | OPT_JSON | OPT_NO_PAGER | OPT_NO_LEGEND | OPT_NO_STORE | OPT_QUIET | OPT_DRY_RUN, false, true,
           verb_auto_assign },
         { "set-bitrate", 1, 1, OPT_BUS | OPT_DELAY | OPT_NO_STORE | OPT_SKIP_MISSING | OPT_GLOBAL | OPT_QUIET,
-          false,
-          verb_set_bitrate },
-        { "reload", 0, 0, OPT_QUIET, false, verb_reload },
-        { "monitor", 0, 0, OPT_BUS | OPT_JSON, false, verb_monitor },
-        { "raw", 1, -1, OPT_BUS | OPT_JSON, false, verb_raw },
-        { "import-dcf", 1, -1, OPT_BUS, false, verb_import_dcf },
+          false, true, verb_set_bitrate },
+        { "reload", 0, 0, OPT_QUIET, false, true, verb_reload },
+        { "monitor", 0, 0, OPT_BUS | OPT_JSON, false, false, verb_monitor },
+        { "raw", 1, -1, OPT_BUS | OPT_JSON, false, true, verb_raw },
+        { "import-dcf", 1, -1, OPT_BUS, false, false, verb_import_dcf },
 };
 
 static void help(void) {
@@ -105,7 +106,8 @@ static void help(void) {
                "                           Also look for configured slaves of this pair (scan)\n"
                "     --as-config           Print what scan found as the buses of lssd.conf(5), a map\n"
                "     --as-dcf DIR          scan: write a CiA 306 DCF fragment per configured device found into DIR\n"
-               "     --no-sdo              scan: LSS only, do not ask every node-ID for its identity by SDO\n\n"
+               "     --no-sdo              scan: LSS only, do not ask every node-ID for its identity by SDO\n"
+               "     --no-ask-password     Do not ask for a password when polkit wants one (no agent)\n\n"
                "See the lssctl(1) man page for details and the exit codes.\n");
 }
 
@@ -127,6 +129,7 @@ enum {
         ARG_NO_SDO,
         ARG_GLOBAL,
         ARG_AS_DCF,
+        ARG_NO_ASK_PASSWORD,
 };
 
 static const char *option_name(unsigned flag) {
@@ -183,6 +186,7 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 { "as-dcf", required_argument, NULL, ARG_AS_DCF },
                 { "no-sdo", no_argument, NULL, ARG_NO_SDO },
                 { "global", no_argument, NULL, ARG_GLOBAL },
+                { "no-ask-password", no_argument, NULL, ARG_NO_ASK_PASSWORD },
                 { "quiet", no_argument, NULL, 'q' },
                 {}
         };
@@ -265,6 +269,9 @@ static int parse_argv(int argc, char *argv[], ctl_context *c, unsigned *given) {
                 case ARG_GLOBAL:
                         c->global = true;
                         *given |= OPT_GLOBAL;
+                        break;
+                case ARG_NO_ASK_PASSWORD:
+                        c->no_ask_password = true;
                         break;
                 case ARG_AS_CONFIG:
                         c->as_config = true;
@@ -386,7 +393,10 @@ int main(int argc, char *argv[]) {
                 if (r < 0)
                         c.no_pager = true; /* not worth failing for */
         }
+        if (v->polkit && !c.no_ask_password)
+                (void) ctl_agent_open(); /* without it polkit cannot ask; lssd says so */
         r = v->run(&c);
+        ctl_agent_close();
         ctl_pager_close(&pager);
 
 finish:

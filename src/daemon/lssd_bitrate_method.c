@@ -27,8 +27,8 @@ int lssd_bitrate_method(lssd_bus *b, sd_bus_message *m, uint32_t bitrate, uint16
         r = lssd_options_read(m, "options", bitrate_table, &o, error);
         if (r < 0)
                 return r;
-        r = lssd_auth_check(lssd_bus_auth(b), m, error);
-        if (r < 0)
+        r = lssd_auth_check(lssd_bus_auth(b), m, LSSD_ACTION_SET_BITRATE, error);
+        if (r != 0)
                 return r;
         /* changing a whole network's rate is opt-in per bus, and on a real
          * controller it needs CAP_NET_ADMIN, which only that opt-in grants */

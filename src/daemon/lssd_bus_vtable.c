@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* org.lssd.LSS1.Bus. Handlers read → validate → no-op fast path → authorize
- * → queue a job (deferred reply) or act → reply. */
+ * (polkit: the handler may run twice, lssd_auth.h) → queue a job (deferred
+ * reply) or act → reply. */
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
@@ -63,14 +64,30 @@ static int property_get_queue_length(sd_bus *bus, const char *path, const char *
         return sd_bus_message_append(reply, "u", (uint32_t) lssd_bus_queue_length(b));
 }
 
-/* Authorize, then lssd_bus_queue_job(). */
-static int submit(lssd_bus *b, sd_bus_message *m, lssd_job *j, bool raw, sd_bus_error *error) {
-        int r = lssd_auth_check(lssd_bus_auth(b), m, error);
-        if (r < 0) {
+/* Authorize, then lssd_bus_queue_job(). While polkit is asked the job is
+ * dropped: the call comes again with the answer and makes it anew. */
+static int submit(lssd_bus *b, sd_bus_message *m, lssd_job *j, lssd_action action, bool raw, sd_bus_error *error) {
+        int r = lssd_auth_check(lssd_bus_auth(b), m, action, error);
+        if (r != 0) {
                 lssd_job_free(j);
                 return r;
         }
         return lssd_bus_queue_job(b, m, j, raw, error);
+}
+
+/* Cancel needs the action of the job it cancels. */
+static lssd_action job_action(lssd_job_type type) {
+        switch (type) {
+        case LSSD_JOB_SCAN:
+                return LSSD_ACTION_SCAN;
+        case LSSD_JOB_SET_BITRATE:
+                return LSSD_ACTION_SET_BITRATE;
+        case LSSD_JOB_RAW:
+        case LSSD_JOB_EXECUTE:
+                return LSSD_ACTION_RAW;
+        default:
+                return LSSD_ACTION_ASSIGN;
+        }
 }
 
 static int method_scan(sd_bus_message *m, void *userdata, sd_bus_error *error) {
@@ -95,7 +112,7 @@ static int method_scan(sd_bus_message *m, void *userdata, sd_bus_error *error) {
                 lssd_job_free(j);
                 return r;
         }
-        return submit(b, m, j, false, error);
+        return submit(b, m, j, LSSD_ACTION_SCAN, false, error);
 }
 
 static int method_assign_node_id(sd_bus_message *m, void *userdata, sd_bus_error *error) {
@@ -123,8 +140,8 @@ int lssd_bus_method_assign(lssd_bus *b, sd_bus_message *m, const lss_identity *i
         lssd_job *j;
         int r;
 
-        r = lssd_auth_check(lssd_bus_auth(b), m, error);
-        if (r < 0)
+        r = lssd_auth_check(lssd_bus_auth(b), m, LSSD_ACTION_ASSIGN, error);
+        if (r != 0)
                 return r;
         /* never give a node-ID another device answers to; the job looks again, and probes */
         if (!o->force && lssd_devices_with_node_id(lssd_bus_devices(b), node_id, id))
@@ -159,7 +176,7 @@ static int method_unassign_node_id(sd_bus_message *m, void *userdata, sd_bus_err
                 return r;
         j->identity = id;
         j->unassign = o;
-        return submit(b, m, j, false, error);
+        return submit(b, m, j, LSSD_ACTION_ASSIGN, false, error);
 }
 
 static int method_auto_assign(sd_bus_message *m, void *userdata, sd_bus_error *error) {
@@ -185,7 +202,7 @@ static int method_auto_assign(sd_bus_message *m, void *userdata, sd_bus_error *e
         if (o.has_nmt_stop)
                 j->plan.nmt_stop = o.nmt_stop;
         j->plan.dry_run = o.dry_run;
-        return submit(b, m, j, false, error);
+        return submit(b, m, j, LSSD_ACTION_ASSIGN, false, error);
 }
 
 static int method_set_bitrate(sd_bus_message *m, void *userdata, sd_bus_error *error) {
@@ -214,8 +231,8 @@ static int method_cancel(sd_bus_message *m, void *userdata, sd_bus_error *error)
 
         if (!lssd_bus_running_job(b) || lssd_bus_running_job(b)->type == LSSD_JOB_RESET) /* nothing to cancel */
                 return sd_bus_reply_method_return(m, NULL);
-        r = lssd_auth_check(lssd_bus_auth(b), m, error);
-        if (r < 0)
+        r = lssd_auth_check(lssd_bus_auth(b), m, job_action(lssd_bus_running_job(b)->type), error);
+        if (r != 0)
                 return r;
         r = lssd_bus_cancel(b, sd_bus_message_get_sender(m), error);
         if (r < 0)
@@ -230,8 +247,8 @@ static int method_acquire(sd_bus_message *m, void *userdata, sd_bus_error *error
 
         if (lssd_bus_holder(b) && sender && strcmp(lssd_bus_holder(b), sender) == 0)
                 return sd_bus_reply_method_return(m, NULL);
-        r = lssd_auth_check(lssd_bus_auth(b), m, error);
-        if (r < 0)
+        r = lssd_auth_check(lssd_bus_auth(b), m, LSSD_ACTION_RAW, error);
+        if (r != 0)
                 return r;
         r = lssd_bus_acquire(b, m, error);
         if (r < 0)
@@ -245,8 +262,8 @@ static int method_release(sd_bus_message *m, void *userdata, sd_bus_error *error
 
         if (!lssd_bus_holder(b))
                 return sd_bus_reply_method_return(m, NULL);
-        r = lssd_auth_check(lssd_bus_auth(b), m, error);
-        if (r < 0)
+        r = lssd_auth_check(lssd_bus_auth(b), m, LSSD_ACTION_RAW, error);
+        if (r != 0)
                 return r;
         r = lssd_bus_release(b, sd_bus_message_get_sender(m), error);
         if (r < 0)
@@ -278,7 +295,7 @@ static int method_raw(sd_bus_message *m, void *userdata, sd_bus_error *error) {
         }
         j->steps[0] = step;
         j->n_steps = 1;
-        return submit(b, m, j, true, error);
+        return submit(b, m, j, LSSD_ACTION_RAW, true, error);
 }
 
 static int method_execute(sd_bus_message *m, void *userdata, sd_bus_error *error) {
@@ -303,7 +320,7 @@ static int method_execute(sd_bus_message *m, void *userdata, sd_bus_error *error
         }
         j->steps = steps;
         j->n_steps = n;
-        return submit(b, m, j, false, error);
+        return submit(b, m, j, LSSD_ACTION_RAW, false, error);
 }
 
 const sd_bus_vtable lssd_bus_vtable[] = {

@@ -46,6 +46,7 @@ lssd_context *lssd_context_free(lssd_context *ctx) {
         for (size_t i = 0; i < ctx->n_buses; i++)
                 lssd_bus_free(ctx->buses[i]);
         free(ctx->buses);
+        lssd_auth_done(&ctx->auth);
         ctx->manager_slot = sd_bus_slot_unref(ctx->manager_slot);
         ctx->object_manager_slot = sd_bus_slot_unref(ctx->object_manager_slot);
         ctx->dbus = sd_bus_flush_close_unref(ctx->dbus);

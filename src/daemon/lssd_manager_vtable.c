@@ -52,8 +52,8 @@ static int method_reload_config(sd_bus_message *m, void *userdata, sd_bus_error 
         lssd_context *ctx = userdata;
         int r;
 
-        r = lssd_auth_check(&ctx->auth, m, error);
-        if (r < 0)
+        r = lssd_auth_check(&ctx->auth, m, LSSD_ACTION_RELOAD, error);
+        if (r != 0)
                 return r;
         r = lssd_context_reload(ctx, error);
         if (r < 0)

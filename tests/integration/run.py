@@ -746,11 +746,14 @@ def test_unprivileged():
         expect(r.rc == 0 and BUS_IFACE in r.stdout, 'introspect as nobody: %r' % r)
         objs = env.call(ROOT, 'org.freedesktop.DBus.ObjectManager', 'GetManagedObjects', **nobody)[0]
         expect(d in objs, 'GetManagedObjects as nobody')
-        # changing is not
-        for path, iface, method, args in MUTATING + [(B0, BUS_IFACE, 'Cancel', ()), (B0, BUS_IFACE, 'Release', ()),
-                                                     (d, DEVICE_IFACE, 'AssignNodeId', ('ya{sv}', 5, 0))]:
+        # changing is not: the policy lets the calls through and lssd refuses them (no polkit on this bus:
+        # root and group lssd only)
+        for path, iface, method, args in MUTATING + [(d, DEVICE_IFACE, 'AssignNodeId', ('ya{sv}', 5, 0))]:
             name, _ = env.call_error(path, iface, method, *args, **nobody)
             expect_eq(name, ACCESS_DENIED, '%s as nobody' % method)
+        # what does nothing is answered before anyone is asked: no job to cancel, no holder to release
+        env.call(B0, BUS_IFACE, 'Cancel', **nobody)
+        env.call(B0, BUS_IFACE, 'Release', **nobody)
         env.alive()
         expect_eq(env.get(B0, BUS_IFACE, 'State'), 'idle', 'nothing happened')
 
