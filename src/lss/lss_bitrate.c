@@ -320,6 +320,16 @@ static int proc_bitrate(lss_master *m) {
         }
         s->cpc = 0;
         PT_CALL(&s->pc, activate(m, s));
+        if (s->foreign) {
+                /* another master spoke in the window: the devices switched,
+                 * the host followed; nothing more but the switch to waiting
+                 * that ends a procedure (at the new rate) */
+                master_fail_at(m, LSS_E_FOREIGN_MASTER, LSS_SERVICE_ACTIVATE_BIT_TIMING, LSS_REASON_NONE,
+                               "another LSS master is active (%s): Activate Bit Timing to %u bit/s had gone out, "
+                               "so the devices switched; they were not verified%s", s->foreign_frame, s->p.bitrate,
+                               s->p.store ? " and not stored" : "");
+                goto out;
+        }
         s->cpc = 0;
         PT_CALL(&s->pc, verify_each(m, s));
         goto out;
@@ -376,6 +386,15 @@ void lss_master_retune_done(lss_master *m, enum lss_retune how, uint64_t now) {
 
 enum lss_retune lss_master_retune_state(const lss_master *m) {
         return m->br.retune;
+}
+
+bool bitrate_on_foreign(lss_master *m, const char *frame) {
+        if (!lss_master_bitrate_committed(m))
+                return false;
+        if (!m->br.foreign)
+                snprintf(m->br.foreign_frame, sizeof(m->br.foreign_frame), "%s", frame);
+        m->br.foreign = true;
+        return true;
 }
 
 bool lss_master_bitrate_committed(const lss_master *m) {
