@@ -325,9 +325,9 @@ static int proc_bitrate(lss_master *m) {
                  * the host followed; nothing more but the switch to waiting
                  * that ends a procedure (at the new rate) */
                 master_fail_at(m, LSS_E_FOREIGN_MASTER, LSS_SERVICE_ACTIVATE_BIT_TIMING, LSS_REASON_NONE,
-                               "another LSS master is active (%s): Activate Bit Timing to %u bit/s had gone out, "
-                               "so the devices switched; they were not verified%s", s->foreign_frame, s->p.bitrate,
-                               s->p.store ? " and not stored" : "");
+                               "another LSS master is active (%s): the devices switched to %u bit/s (Activate Bit "
+                               "Timing had gone out), none was verified%s", s->foreign_frame, s->p.bitrate,
+                               s->p.store ? " or stored" : "");
                 goto out;
         }
         s->cpc = 0;

@@ -33,7 +33,8 @@ LSSCTL = os.environ.get('LSSCTL_BINARY', 'lssctl')
 EXIT = {
     'ok': 0, 'failure': 1, 'usage': 2, 'not-running': 3, 'access-denied': 4, 'no-response': 5, 'rejected': 6,
     'busy': 7, 'bus-down': 8, 'bus-off': 9, 'not-found': 10, 'conflict': 11, 'cancelled': 12,
-    'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'permission-denied': 16, 'partial': 17, 'not-held': 18, 'interrupted': 130,
+    'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'permission-denied': 16, 'partial': 17, 'not-held': 18,
+    'foreign-master': 19, 'interrupted': 130,
 }
 
 # the bus and map of the D-Bus tests (run.py), so both check the same devices
