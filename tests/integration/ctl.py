@@ -43,7 +43,7 @@ from run import CONFIG, SLAVES, VCAN1  # noqa: E402
 JSON_DEVICE_KEYS = ['bus', 'vendor', 'product', 'revision', 'serial', 'revision_known', 'node_id', 'mapped_node_id',
                     'state', 'last_seen', 'path']
 JSON_BUS_KEYS = ['interface', 'state', 'bitrate', 'job', 'progress', 'queue_length', 'devices', 'device_states',
-                 'last_pass']
+                 'last_pass', 'foreign_master']
 
 
 def expect(cond, what):
@@ -178,6 +178,7 @@ def test_status():
         expect_eq(sorted(b), sorted(JSON_BUS_KEYS), 'bus keys')
         expect_eq((b['interface'], b['state'], b['bitrate'], b['job'], b['queue_length']),
                   ('vcan0', 'idle', 125000, '', 0), 'bus')
+        expect_eq(b['foreign_master'], None, 'no other LSS master heard')
         scan_all(env)
         b = ctl.ok('--json', 'status').json['buses'][0]  # options before the command work too
         expect_eq(b['devices'], 4, 'device count')

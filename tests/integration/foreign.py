@@ -1,0 +1,278 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""Another LSS master on the bus (issue 39): `foreign.py NAME`. lssd at its
+default timing (no lss_timeout_ms in the configuration); on vcan candump is
+the witness and the other master is `cansend` (or python-canopen), on lssd
+--simulate it is --sim-foreign-master and LSSD_SIM_TRACE's lines of the
+simulated wire are the witness.
+
+  autoassign  a blind AutoAssign of 8 (pool 71..90); 0.3 s in, another
+              master's request (cansend vcan0 7E5#5A00000000000000): the call
+              ends within 2 s with ForeignMaster naming it, no Configure
+              Node-ID or Store from lssd after it; the next call is refused
+              (lssctl: exit 19), lssctl status and the ForeignMaster property
+              say so; after 3 s of quiet AutoAssign gives all 8 a node-ID
+  boot        the boot pass (pool, 4 devices) while another master sends a
+              request every 100 ms for 2 s: it waits (STATUS= says why),
+              then ends with every device assigned; READY=1 after the quiet
+  canopen     python-canopen's LssMaster.fast_scan() on vcan0 while lssd's
+              boot pass runs (VM): nothing wrongly assigned, lssd waits and
+              finishes after the other master stopped (python-canopen from
+              the venv tests/install-deps makes: LSSD_CANOPEN_PYTHON)"""
+
+import os
+import random
+import re
+import socket
+import struct
+import subprocess
+import sys
+import threading
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from autoassign import all_waiting, expect, expect_eq, slave_ids  # noqa: E402
+from ctl import Ctl  # noqa: E402
+from lssdtest import BUS_IFACE, DEVICE_IFACE, ERR, Env, Skip, Slave, bus_path, device_path, run  # noqa: E402
+
+B0 = bus_path('vcan0')
+V, P, R = 0x2B4, 0x7A1, 0x10001
+FOREIGN_ERROR = ERR + 'ForeignMaster'
+POOL = (71, 90)
+CS_CONFIGURE_NODE_ID, CS_STORE = 0x11, 0x17
+# the issue's frame on vcan; lssd --simulate's other master (SIMBUS_FOREIGN_FRAME)
+CANSEND_FRAME = '7E5#5A00000000000000'
+SIM_FRAME = '7E5#5AF0F0F0F0F0F0F0'
+CANOPEN_PYTHON = os.environ.get('LSSD_CANOPEN_PYTHON', '/var/cache/lssd-canopen/venv-2.4.1/bin/python')
+
+
+def slaves_of(n, seed):
+    rnd = random.Random(seed)
+    return [Slave(V, P, R, rnd.getrandbits(32)) for _ in range(n)]
+
+
+def config(auto_assign=False):
+    """A blind pool bus at lssd's default timing: no lss_timeout_ms, no foreign_master_quiet_s (3 s)."""
+    return ('buses = ( { interface = "vcan0"; unknown = "pool"; pool = [ %d, %d ]; auto_assign = %s; } );\n'
+            % (POOL + ('true' if auto_assign else 'false',)))
+
+
+def sim_trace(env):
+    """(CLOCK_MONOTONIC s, frame) of the simulated wire, from lssd's log (LSSD_SIM_TRACE=1)."""
+    return [(int(m.group(1)) + int(m.group(2)) / 1e6, m.group(3))
+            for m in re.finditer(r'^\((\d+)\.(\d+)\) sim (\S+)$', env.lssd_output(), re.M)]
+
+
+def foreign_frame(env):
+    return CANSEND_FRAME if env.real else SIM_FRAME
+
+
+def send_requests(data, n, period, start=None):
+    """Another master on vcan0: n LSS requests `data`, `period` s apart, from a
+    socket of its own; returns the time.time() of each."""
+    sent = []
+    with socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW) as s:
+        s.bind(('vcan0',))
+        for _ in range(n):
+            sent.append(time.time())
+            s.send(struct.pack('=IB3x8s', 0x7E5, 8, data))
+            time.sleep(period)
+    return sent
+
+
+def lssd_requests_between(env, t0, t1, cs):
+    """lssd's requests with cs in (t0, t1] (candump's wall-clock times), the other master's aside."""
+    return [f for f in env.lss_frames('vcan0') if t0 < f[0] <= t1 and f[1] == 0x7E5 and f[2][0] in cs]
+
+
+def pool_ids(env, slaves):
+    """serial -> node-ID each slave has now: lss-sim's state on vcan (active
+    and stored, which must agree), a Scan on the simulated bus."""
+    if env.real:
+        ids = slave_ids(env, 'vcan0', slaves)
+        for serial, (active, stored) in ids.items():
+            expect_eq(stored, active, 'slave %08x: stored node-ID' % serial)
+        return {k: v[0] for k, v in ids.items()}
+    devices, _ = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)
+    return {d[3]: d[4] for d in devices}
+
+
+def expect_all_pooled(env, slaves):
+    ids = pool_ids(env, slaves)
+    expect_eq(sorted(ids), sorted(s.serial for s in slaves), 'the slaves')
+    expect(all(POOL[0] <= n <= POOL[1] for n in ids.values()), 'a node-ID of the pool each: %r' % ids)
+    expect_eq(len(set(ids.values())), len(slaves), 'a node-ID of its own each: %r' % ids)
+
+
+def test_autoassign():
+    slaves = slaves_of(8, 39)
+    os.environ['LSSD_SIM_TRACE'] = '1'  # the simulated wire in lssd's log
+    # on the simulated bus the other master starts once lssd wrote 200 LSS requests
+    env = Env({'vcan0': slaves}, config=config(), candump=True, lssd_args=['--sim-foreign-master', 'vcan0:200'])
+    if env.real:
+        env.lssd_args = []
+    with env:
+        ctl = Ctl(env)
+        reply = {}
+
+        def call():
+            reply['r'] = env.busctl('call', 'org.lssd.LSS1', B0, BUS_IFACE, 'AutoAssign', 'a{sv}', '0')
+            reply['t'], reply['w'] = time.monotonic(), time.time()
+        t = threading.Thread(target=call)
+        w_start = time.time()
+        t.start()
+        if env.real:
+            time.sleep(0.3)
+            w_foreign = time.time()
+            subprocess.run(['cansend', 'vcan0', CANSEND_FRAME], check=True)
+            t_foreign = time.monotonic()
+        t.join(120)
+        r = reply['r']
+        env.step('AutoAssign: %r' % r)
+        expect_eq(r.error_name, FOREIGN_ERROR, 'the call ends with ForeignMaster')
+        expect('another LSS master is active on vcan0: %s at ' % foreign_frame(env) in r.error_message,
+               'the error names the frame and when: %r' % r.error_message)
+        if env.real:
+            expect(reply['t'] - t_foreign < 2.0, 'the call ended %.2f s after the request' % (reply['t'] - t_foreign))
+            time.sleep(0.3)  # candump's log
+            ours = [f for f in env.lss_frames('vcan0') if w_foreign - 0.05 <= f[0] and f[1] == 0x7E5 and
+                    f[2] == bytes.fromhex(CANSEND_FRAME[4:])]
+            expect(ours, 'candump shows the other master\'s request')
+            after = lssd_requests_between(env, ours[0][0], reply['w'], (CS_CONFIGURE_NODE_ID, CS_STORE))
+            expect_eq(after, [], 'Configure Node-ID or Store from lssd after the other master\'s request')
+            expect(lssd_requests_between(env, w_start, ours[0][0], range(256)), 'lssd had started its pass')
+        else:
+            trace = sim_trace(env)
+            at = [t for t, f in trace if f == SIM_FRAME]
+            expect(at, 'the simulated wire has the other master\'s request')
+            expect(reply['t'] - at[0] < 2.0, 'the call ended %.2f s after the request' % (reply['t'] - at[0]))
+            after = [f for t, f in trace if at[0] < t <= reply['t'] and f.startswith(('7E5#11', '7E5#17'))]
+            expect_eq(after, [], 'Configure Node-ID or Store from lssd after the other master\'s request')
+        expect(all_waiting(env, 'vcan0', slaves) if env.real else True, 'a slave left in configuration')
+
+        # what the pass did before stands
+        last = env.get(B0, BUS_IFACE, 'LastPass')
+        expect_eq((last[2], last[3]), ('call', 'foreign-master'), 'LastPass: %r' % (last,))
+        pooled = last[4].get('pool', 0)
+        env.step('%d devices took a pool node-ID before the request' % pooled)
+
+        # refused until it is quiet: the call, lssctl, the property, the journal
+        name, msg = env.call_error(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)
+        expect_eq(name, FOREIGN_ERROR, 'AutoAssign during the quiet')
+        expect('takes LSS jobs again once it heard no LSS request of another master for 3 s' in msg, msg)
+        ctl.fails('foreign-master', 'another LSS master is active on vcan0', 'auto-assign')
+        status = ctl.ok('status').out
+        expect('another LSS master active, last heard ' in status and foreign_frame(env) in status,
+               'lssctl status: %s' % status)
+        fm = env.get(B0, BUS_IFACE, 'ForeignMaster')
+        expect_eq((fm[0], fm[3]), (True, foreign_frame(env)), 'ForeignMaster: %r' % (fm,))
+        expect(0 < fm[1] <= fm[2], 'ForeignMaster times: %r' % (fm,))
+        expect('another LSS master is active on vcan0: %s' % foreign_frame(env) in env.lssd_output(),
+               'the journal has the frame')
+
+        # 3 s of quiet: served again, the rest assigned
+        env.wait_until(lambda: not env.get(B0, BUS_IFACE, 'ForeignMaster')[0], timeout=10,
+                       what='the end of the quiet')
+        expect('none active; another LSS master was last heard' in ctl.ok('status').out, 'lssctl status after')
+        outcomes, result = env.call(B0, BUS_IFACE, 'AutoAssign', 'a{sv}', 0)
+        expect_eq(result, 'done', 'AutoAssign after the quiet: %r' % (outcomes,))
+        expect_eq(sum(o[6] == 'pool' for o in outcomes), len(slaves) - pooled, 'pool outcomes %r' % (outcomes,))
+        expect_all_pooled(env, slaves)
+        env.alive()
+
+
+def test_boot():
+    slaves = slaves_of(4, 40)
+    # the other master from the start: a request every 100 ms for 2 s
+    env = Env({'vcan0': slaves}, config=config(auto_assign=True), candump=True, notify=True, start_lssd=False,
+              lssd_args=['--sim-foreign-master', 'vcan0:0:20:100'])
+    if env.real:
+        env.lssd_args = []
+    with env:
+        sent = {}
+        if env.real:
+            t = threading.Thread(target=lambda: sent.setdefault('w', send_requests(b'\x5a' + bytes(7), 20, 0.1)))
+            t.start()
+            time.sleep(0.2)
+        env._start_lssd()
+        ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=600, what='READY=1')
+        if env.real:
+            t.join()
+            last = sent['w'][-1]
+            expect(ready['_rt'] - last > 2.5, 'READY %.2f s after the other master\'s last request' %
+                   (ready['_rt'] - last))
+        waits = [m for m in env.notify_msgs if 'auto-assign waits until another LSS master' in m.get('STATUS', '')]
+        expect(waits and waits[0]['_t'] < ready['_t'], 'STATUS said why the pass waits: %r' % env.notify_msgs)
+        expect('from the pool' in ready.get('STATUS', ''), 'STATUS at READY: %r' % ready)
+        last_pass = env.get(B0, BUS_IFACE, 'LastPass')
+        expect_eq((last_pass[2], last_pass[3]), ('boot', 'done'), 'LastPass %r' % (last_pass,))
+        expect('the boot pass runs again once no LSS request of another master was heard for 3 s'
+               in env.lssd_output(), 'the journal says the pass waits')
+        expect_all_pooled(env, slaves)
+        env.alive()
+
+
+CANOPEN_SCRIPT = r'''
+import sys, time, canopen
+net = canopen.Network()
+net.connect(interface='socketcan', channel='vcan0')
+print('start %.6f' % time.time(), flush=True)
+try:
+    ok, lss_id = net.lss.fast_scan()
+    print('fast_scan %r %r' % (ok, lss_id), flush=True)
+except Exception as e:  # how python-canopen fares is not what is tested
+    print('fast_scan raised %r' % e, flush=True)
+finally:
+    net.disconnect()
+print('end %.6f' % time.time(), flush=True)
+'''
+
+
+def test_canopen():
+    slaves = slaves_of(4, 41)
+    env = Env({'vcan0': slaves}, config=config(auto_assign=True), candump=True, notify=True)
+    if not env.real:
+        raise Skip('python-canopen needs SocketCAN')
+    check = subprocess.run([CANOPEN_PYTHON, '-c', 'import canopen, can'], capture_output=True, text=True)
+    expect(check.returncode == 0, 'no python-canopen at %s (tests/install-deps makes its venv): %s'
+           % (CANOPEN_PYTHON, check.stderr[-300:]))
+    with env:
+        # lssd's boot pass is on the wire: python-canopen starts its fastscan
+        env.wait_until(lambda: any(f[1] == 0x7E5 and f[2][0] == 0x51 for f in env.lss_frames('vcan0')),
+                       timeout=60, what='the boot pass on the wire')
+        p = subprocess.run([CANOPEN_PYTHON, '-c', CANOPEN_SCRIPT], capture_output=True, text=True, timeout=600)
+        env.step('python-canopen: %s %s' % (p.stdout.strip(), p.stderr[-500:]))
+        expect_eq(p.returncode, 0, 'python-canopen ran')
+        w = dict(line.split(' ', 1) for line in p.stdout.splitlines() if line.startswith(('start', 'end')))
+        w0, w1 = float(w['start']), float(w['end'])
+        ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=600, what='READY=1')
+        time.sleep(0.3)  # candump's log
+        # lssd noticed, waited, and finished after the other master stopped
+        expect('another LSS master is active on vcan0: 7E5#51' in env.lssd_output(), 'the journal has its frame')
+        expect(any('auto-assign waits until another LSS master' in m.get('STATUS', '') for m in env.notify_msgs),
+               'STATUS said why the pass waits')
+        expect(ready['_rt'] > w1, 'READY %.2f s after python-canopen ended' % (ready['_rt'] - w1))
+        # while the other master was at it, lssd configured and stored nothing
+        theirs = [f for f in env.lss_frames('vcan0') if w0 <= f[0] <= w1 and f[1] == 0x7E5 and f[2][0] == 0x51]
+        expect(theirs, 'python-canopen\'s fastscan on the wire')
+        during = lssd_requests_between(env, theirs[0][0], theirs[-1][0], (CS_CONFIGURE_NODE_ID, CS_STORE))
+        expect_eq(during, [], 'Configure Node-ID or Store from lssd while the other master was active')
+        # nothing wrongly assigned: a pool node-ID of its own each, stored, as the pass says
+        last_pass = env.get(B0, BUS_IFACE, 'LastPass')
+        expect_eq((last_pass[2], last_pass[3]), ('boot', 'done'), 'LastPass %r' % (last_pass,))
+        expect_all_pooled(env, slaves)
+        for s in slaves:
+            expect_eq(env.get(device_path('vcan0', *s.identity), DEVICE_IFACE, 'State'), 'pool',
+                      'State of %08x' % s.serial)
+        expect(all_waiting(env, 'vcan0', slaves), 'a slave left in configuration')
+        env.alive()
+
+
+TESTS = {
+    'autoassign': test_autoassign,
+    'boot': test_boot,
+    'canopen': test_canopen,
+}
+
+if __name__ == '__main__':
+    sys.exit(run(TESTS))
