@@ -33,7 +33,8 @@ static void help(void) {
                "                         PROFILE: " SIMBUS_PROFILES "\n"
                "     --sim-foreign-master IFACE:AFTER[:COUNT[:PERIOD_MS]]\n"
                "                         Another LSS master on simulated bus IFACE: once lssd wrote AFTER LSS\n"
-               "                         requests there, COUNT requests " SIMBUS_FOREIGN_FRAME ", PERIOD_MS apart\n",
+               "                         requests there (@CS: its first with that cs), COUNT requests\n"
+               "                         " SIMBUS_FOREIGN_FRAME ", PERIOD_MS apart\n",
                LSSD_DEFAULT_CONFIG, LSSD_QUEUE_MAX_DEFAULT, LSSCONF_LSS_TIMEOUT_MS_DEFAULT);
 }
 
@@ -156,7 +157,7 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                         simbus_foreign f;
                         if (simbus_foreign_parse(optarg, &f) < 0) {
                                 log_error("Invalid --sim-foreign-master '%s': IFACE:AFTER[:COUNT[:PERIOD_MS]] (AFTER "
-                                          "0..1000000, COUNT 1..100000, PERIOD_MS 1..60000)", optarg);
+                                          "0..1000000 or @CS 0..255, COUNT 1..100000, PERIOD_MS 1..60000)", optarg);
                                 return -EINVAL;
                         }
                         simbus_foreign *v = realloc(a->sim_foreign, (a->n_sim_foreign + 1) * sizeof(*v));

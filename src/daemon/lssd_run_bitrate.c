@@ -197,12 +197,13 @@ static int foreign_master(lssd_job_env *e, lssd_job *j, const lss_result *r, boo
         if (activated)
                 return fail(e, j, LSSD_ERROR_FOREIGN_MASTER, "foreign-master",
                             "%s; Activate Bit Timing to %u bit/s had gone out: the devices switched, %zu of %zu "
-                            "verified at the new rate%s%s (the others were not asked); %s", r->message, j->bitrate,
+                            "verified at the new rate%s%s (the others were not); %s", r->message, j->bitrate,
                             n, j->n_br_devices, n ? ": " : "", ids, host);
         return fail(e, j, LSSD_ERROR_FOREIGN_MASTER, "foreign-master",
                     "%s; nothing was activated, the bus stays at %u bit/s%s%s", r->message, lssd_job_env_bitrate(e),
-                    n ? "; these accepted Configure Bit Timing and keep that rate pending, not configured back "
-                        "(a Store Configuration would make it theirs at the next power cycle: power-cycle them): " : "",
+                    n ? "; these took (or may have taken) Configure Bit Timing and keep that rate pending, not "
+                        "configured back (a Store Configuration would make it theirs at the next power cycle: "
+                        "power-cycle them): " : "",
                     ids);
 }
 

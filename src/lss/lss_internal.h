@@ -250,6 +250,7 @@ typedef struct lss_bitrate_state {
         uint64_t heard_at;      /* the slaves heard Activate Bit Timing (end of the frame on the wire) */
         enum lss_retune retune;
         unsigned answers;       /* global: most answers to one Configure Bit Timing */
+        bool configuring;       /* a Configure Bit Timing to the new rate is out, not answered yet */
         bool foreign;           /* another master was heard in the committed window */
         char foreign_frame[32]; /* ... its request */
 } lss_bitrate_state;

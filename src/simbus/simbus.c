@@ -43,7 +43,11 @@ static int sim_send(void *impl, const lss_frame *f) {
         simbus *s = impl;
         catch_up(s);
         membus_master_send(s->bus, f);
-        if (lss_is_request(f) && ++s->requests >= s->foreign.after && s->foreign_armed)
+        if (!lss_is_request(f))
+                return 0;
+        s->requests++;
+        if (s->foreign_armed && (s->foreign.after_cs ? f->data[0] == s->foreign.after_cs :
+                                                            s->requests >= s->foreign.after))
                 foreign_start(s);
         return 0;
 }
@@ -52,7 +56,7 @@ void simbus_add_foreign(simbus *s, const simbus_foreign *f) {
         catch_up(s);
         s->foreign = *f;
         s->foreign_armed = f->count > 0;
-        if (s->foreign_armed && f->after <= s->requests)
+        if (s->foreign_armed && !f->after_cs && f->after <= s->requests)
                 foreign_start(s);
 }
 
@@ -228,7 +232,14 @@ int simbus_foreign_parse(const char *spec, simbus_foreign *ret) {
         if (n < 2)
                 return -EINVAL;
         simbus_foreign f = { .count = 1, .period_ms = 100 };
-        if (parse_in(fields[1], 0, 1000000, &f.after) < 0 || (n > 2 && parse_in(fields[2], 1, 100000, &f.count) < 0) ||
+        unsigned cs;
+        if (fields[1][0] == '@') {
+                if (parse_in(fields[1] + 1, 1, 255, &cs) < 0)
+                        return -EINVAL;
+                f.after_cs = (int) cs;
+        } else if (parse_in(fields[1], 0, 1000000, &f.after) < 0)
+                return -EINVAL;
+        if ((n > 2 && parse_in(fields[2], 1, 100000, &f.count) < 0) ||
             (n > 3 && parse_in(fields[3], 1, 60000, &f.period_ms) < 0))
                 return -EINVAL;
         strcpy(f.ifname, fields[0]);

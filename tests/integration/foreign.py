@@ -18,6 +18,10 @@ simulated wire are the witness.
   boot        the boot pass (pool, 4 devices) while another master sends a
               request every 100 ms for 2 s: it waits (STATUS= says why),
               then ends with every device assigned; READY=1 after the quiet
+  bitrate     (--simulate) SetBitrate, the other master at its Activate Bit
+              Timing: it keeps to its window, the bus and devices switch,
+              nothing after but the switch to waiting; at its first Configure
+              Bit Timing: nothing activated, that device named
   canopen     python-canopen's LssMaster.fast_scan() on vcan0 while lssd's
               boot pass runs (VM): nothing wrongly assigned, lssd waits and
               finishes after the other master stopped (python-canopen from
@@ -305,6 +309,52 @@ def test_canopen():
         env.alive()
 
 
+BITRATE_CONFIG = ('buses = ( { interface = "vcan0"; bitrate = 125000; bitrate_change = true; store = false;\n'
+                  '  devices = ( %s ); } );\n')
+
+
+def test_bitrate():
+    """SetBitrate on the simulated bus, the other master at its Activate Bit
+    Timing: the devices and the host switch (the window is kept), nothing is
+    verified or stored after; at its first Configure Bit Timing: nothing is
+    activated, the device asked is named as holding the rate pending."""
+    if os.environ.get('LSSD_TEST_BACKEND') != 'simulate':
+        raise Skip('the simulated bus: the other master at an exact request (--sim-foreign-master @CS)')
+    slaves = [Slave(0x9A, 3, 1, 0x31 + i, 20 + i) for i in range(2)]
+    cfg = BITRATE_CONFIG % ', '.join('{ vendor = 0x9A; product = 3; revision = 1; serial = 0x%x; node_id = %d; }'
+                                     % (s.serial, s.node_id) for s in slaves)
+    os.environ['LSSD_SIM_TRACE'] = '1'
+    for at, rate_after in (('@0x15', 250000), ('@0x13', 125000)):
+        with Env({'vcan0': slaves}, config=cfg, lssd_args=['--sim-foreign-master', 'vcan0:' + at]) as env:
+            t0 = time.monotonic()
+            name, msg = env.call_error(B0, BUS_IFACE, 'SetBitrate', 'uqa{sv}', 250000, 20, 0)
+            t1 = time.monotonic()
+            env.step('%s: %s' % (at, msg))
+            expect_eq(name, FOREIGN_ERROR, 'SetBitrate with the other master at %s' % at)
+            expect('another LSS master is active on vcan0: %s' % SIM_FRAME in msg, msg)
+            expect_eq(env.get(B0, BUS_IFACE, 'Bitrate'), rate_after, 'the bus rate after it (%s)' % at)
+            trace = sim_trace(env)
+            ft = [t for t, f in trace if f == SIM_FRAME][0]
+            ours = [f for t, f in trace if ft < t <= t1 and f.startswith('7E5#') and f != SIM_FRAME]
+            if at == '@0x15':
+                expect('Activate Bit Timing to 250000 bit/s had gone out: the devices switched, 0 of 2 verified'
+                       in msg, msg)
+                # the window kept, then one switch to waiting at the new rate: no verification, no Store
+                expect_eq(ours, ['7E5#0400000000000000'], 'lssd after the other master\'s request')
+            else:
+                expect('nothing was activated, the bus stays at 125000 bit/s; these took (or may have taken) '
+                       'Configure Bit Timing' in msg and '0000009a:00000003:00000001:00000031' in msg, msg)
+                expect(all(not f.startswith(('7E5#13', '7E5#15')) for f in ours),
+                       'Configure or Activate Bit Timing after it: %r' % ours)
+            expect(t1 - t0 < 60, 'SetBitrate took %.1f s' % (t1 - t0))
+            # once it is quiet, both devices answer at the rate the bus has
+            env.wait_until(lambda: not env.get(B0, BUS_IFACE, 'ForeignMaster')[0], timeout=30,
+                           what='the end of the quiet')
+            devices, _ = env.call(B0, BUS_IFACE, 'Scan', 'a{sv}', 0)
+            expect_eq(sorted(d[3] for d in devices), [s.serial for s in slaves], 'a Scan at %u bit/s' % rate_after)
+            env.alive()
+
+
 def read_source(*path):
     with open(os.path.join(SOURCE_ROOT, *path)) as f:
         return f.read()
@@ -358,6 +408,7 @@ def test_docs():
 
 TESTS = {
     'docs': test_docs,
+    'bitrate': test_bitrate,
     'autoassign': test_autoassign,
     'boot': test_boot,
     'canopen': test_canopen,

@@ -268,6 +268,13 @@ START_TEST(sim_foreign_spec) {
         ck_assert_uint_eq(f.after, 0);
         ck_assert_uint_eq(f.count, 20);
         ck_assert_uint_eq(f.period_ms, 50);
+        ck_assert_int_eq(f.after_cs, 0);
+        /* at lssd's first Activate Bit Timing */
+        ck_assert_int_eq(simbus_foreign_parse("sim:@0x15", &f), 0);
+        ck_assert_int_eq(f.after_cs, 0x15);
+        ck_assert_int_eq(simbus_foreign_parse("sim:@256", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim:@0", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim:@", &f), -EINVAL);
         ck_assert_int_eq(simbus_foreign_parse("sim", &f), -EINVAL);
         ck_assert_int_eq(simbus_foreign_parse("sim:1:0", &f), -EINVAL);
         ck_assert_int_eq(simbus_foreign_parse("sim:1:1:0", &f), -EINVAL);

@@ -340,6 +340,10 @@ START_TEST(bitrate_before_activation_ends_at_once) {
         for (size_t i = 0; i < 3; i++)
                 ck_assert_int_eq(membus_slave(b, i)->st.bit_index, lss_bit_timing_index(125000));
         ck_assert_uint_eq(membus_bitrate(b), 125000);
+        /* the first took the new rate, pending: it is named so, not configured back */
+        ck_assert_int_eq(membus_slave(b, 0)->st.pending_bit_index, lss_bit_timing_index(250000));
+        ck_assert_int_eq(devs[0].outcome, LSS_BITRATE_CONFIGURED);
+        ck_assert_int_eq(devs[2].outcome, LSS_BITRATE_REACHED);
         ck_assert(all_waiting(b));
         lss_master_free(m);
         membus_free(b);
