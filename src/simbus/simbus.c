@@ -65,10 +65,6 @@ struct membus *simbus_bus(simbus *s) {
         return s->bus;
 }
 
-void simbus_inject(simbus *s, const lss_frame *f) {
-        catch_up(s);
-        membus_inject(s->bus, f, membus_now(s->bus));
-}
 
 static int sim_recv(void *impl, lss_frame *f, uint64_t *rx_us) {
         simbus *s = impl;

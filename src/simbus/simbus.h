@@ -51,8 +51,6 @@ typedef struct simbus_foreign {
  * default 100). -EINVAL if malformed. */
 int simbus_foreign_parse(const char *spec, simbus_foreign *ret);
 void simbus_add_foreign(simbus *s, const simbus_foreign *f);
-/* A frame of another node on the bus now (tests). */
-void simbus_inject(simbus *s, const lss_frame *f);
 /* The in-memory bus behind it, caught up to now (tests look at the slaves). */
 struct membus *simbus_bus(simbus *s);
 

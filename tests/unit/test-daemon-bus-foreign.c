@@ -137,29 +137,32 @@ START_TEST(refused_during_quiet_then_accepted) {
         fixture f;
         char msg[512];
         lssd_bus_foreign fm;
-        const lss_frame other = { .id = 0x7E5, .len = 8, .data = { 0x5A } };
+        sd_bus_error e = SD_BUS_ERROR_NULL;
+        lssd_job *reset = NULL;
 
-        up_idle(&f, (simbus_foreign) { 0 });
+        /* the other master speaks once after lssd's second request: the
+         * switch to waiting of a Reset on the idle bus below */
+        up_idle(&f, (simbus_foreign) { .after = 2, .count = 1, .period_ms = 100 });
         ck_assert(!refused(&f, msg, sizeof(msg)));
         lssd_bus_foreign_get(f.bus, &fm);
         ck_assert(!fm.active);
         ck_assert_uint_eq(fm.since_us, 0);
 
-        simbus_inject(sim, &other);
-        run_for(&f, 50000);
+        ck_assert_int_eq(lssd_job_new(LSSD_JOB_RESET, NULL, &reset), 0);
+        ck_assert_int_eq(lssd_bus_submit(f.bus, reset, &e), 0);
+        for (unsigned i = 0; i < 200 && !refused(&f, msg, sizeof(msg)); i++)
+                run_for(&f, 10000);
         ck_assert(refused(&f, msg, sizeof(msg)));
-        ck_assert_msg(strstr(msg, "another LSS master is active on sim0: 7E5#5A00000000000000 at "), "%s", msg);
+        ck_assert_msg(strstr(msg, "another LSS master is active on sim0: " SIMBUS_FOREIGN_FRAME " at "), "%s", msg);
         ck_assert_msg(strstr(msg, "once it heard no LSS request of another master for 1 s"), "%s", msg);
         lssd_bus_foreign_get(f.bus, &fm);
         ck_assert(fm.active);
         ck_assert_uint_gt(fm.since_us, 0);
-        ck_assert_str_eq(fm.frame, "7E5#5A00000000000000");
+        ck_assert_str_eq(fm.frame, SIMBUS_FOREIGN_FRAME);
         ck_assert_uint_eq(fm.count, 1);
 
         /* a job of its own waits */
-        lssd_job *j = auto_assign_job(&f);
-        sd_bus_error e = SD_BUS_ERROR_NULL;
-        ck_assert_int_eq(lssd_bus_submit(f.bus, j, &e), 0);
+        ck_assert_int_eq(lssd_bus_submit(f.bus, auto_assign_job(&f), &e), 0);
         ck_assert_ptr_null(lssd_bus_running_job(f.bus));
         ck_assert_uint_eq(lssd_bus_queue_length(f.bus), 1);
         run_for(&f, 500000);
@@ -171,7 +174,7 @@ START_TEST(refused_during_quiet_then_accepted) {
         ck_assert(!refused(&f, msg, sizeof(msg)));
         lssd_bus_foreign_get(f.bus, &fm);
         ck_assert(!fm.active);
-        ck_assert_str_eq(fm.frame, "7E5#5A00000000000000");
+        ck_assert_str_eq(fm.frame, SIMBUS_FOREIGN_FRAME);
         run_until_idle(&f, 30000000);
         ck_assert_str_eq(lssd_bus_job_env(f.bus)->last_pass.result, "done");
         ck_assert_uint_eq(slaves_at(simbus_bus(sim), 71, 90), N_SLAVES);
