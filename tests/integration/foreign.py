@@ -90,6 +90,14 @@ def send_requests(data, n, period, stop=None):
     return sent
 
 
+def log_candump(env, around, before=4, after=8):
+    """candump's LSS lines around the time `around`, for the test log."""
+    frames = env.lss_frames('vcan0')
+    k = next((i for i, f in enumerate(frames) if f[0] >= around), len(frames))
+    for t, ident, data in frames[max(0, k - before):k + after]:
+        env.step('candump (%+.3f s) %03X#%s' % (t - around, ident, data.hex().upper()))
+
+
 def lssd_requests_between(env, t0, t1, cs):
     """lssd's requests with cs in (t0, t1] (candump's wall-clock times), the other master's aside."""
     return [f for f in env.lss_frames('vcan0') if t0 < f[0] <= t1 and f[1] == 0x7E5 and f[2][0] in cs]
@@ -153,6 +161,7 @@ def test_autoassign():
             ours = [f for f in env.lss_frames('vcan0') if w_foreign - 0.05 <= f[0] and f[1] == 0x7E5 and
                     f[2] == bytes.fromhex(CANSEND_FRAME[4:])]
             expect(ours, 'candump shows the other master\'s request')
+            log_candump(env, ours[0][0])
             env.step('the request %.2f s into the pass, the call ended %.2f s after it (cansend took %.2f s)'
                      % (ours[0][0] - first[0][0], reply['w'] - ours[0][0], cansend_s))
             expect(reply['w'] - ours[0][0] < 2.0, 'the call ended %.2f s after the request' % (reply['w'] - ours[0][0]))
@@ -296,6 +305,8 @@ def test_canopen():
         # while the other master was at it, lssd configured and stored nothing
         theirs = [f for f in env.lss_frames('vcan0') if w0 <= f[0] <= w1 and f[1] == 0x7E5 and f[2][0] == 0x51]
         expect(theirs, 'python-canopen\'s fastscan on the wire')
+        log_candump(env, theirs[0][0])
+        log_candump(env, theirs[-1][0], before=2, after=6)
         during = lssd_requests_between(env, theirs[0][0], theirs[-1][0], (CS_CONFIGURE_NODE_ID, CS_STORE))
         expect_eq(during, [], 'Configure Node-ID or Store from lssd while the other master was active')
         # nothing wrongly assigned: a pool node-ID of its own each, stored, as the pass says
