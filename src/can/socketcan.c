@@ -50,7 +50,7 @@ struct socketcan_port {
 #define SFF_DATA(mask) (CAN_EFF_FLAG | CAN_RTR_FLAG | (mask))
 static const struct can_filter rx_filters[] = {
         { LSS_COB_SLAVE, SFF_DATA(CAN_SFF_MASK) },
-        /* 0x7E5 of other senders is dropped in recv() */
+        /* 0x7E5: our own requests back (MSG_CONFIRM), and another master's */
         { LSS_COB_MASTER, SFF_DATA(CAN_SFF_MASK) },
         { 0x701, SFF_DATA(0x7FF) },     /* 0x701 */
         { 0x702, SFF_DATA(0x7FE) },     /* 0x702..0x703 */
@@ -598,12 +598,12 @@ int socketcan_port_recv(socketcan_port *p, lss_frame *f, uint64_t *rx_us) {
                         p->rx_invalid++;
                         continue;
                 }
-                if (f->id == LSS_COB_MASTER && !(f->flags & LSS_FRAME_EFF)) {
-                        /* another sender's LSS request (a second master, a tool): no answer */
-                        if (!(msg.msg_flags & MSG_CONFIRM))
-                                continue;
+                /* Our own request back from the controller carries MSG_CONFIRM;
+                 * one without it is another sender's (a second master, a
+                 * tool): it comes out as it is, for the caller to notice
+                 * (lss_is_foreign_request()). */
+                if (f->id == LSS_COB_MASTER && !(f->flags & LSS_FRAME_EFF) && (msg.msg_flags & MSG_CONFIRM))
                         f->flags |= LSS_FRAME_ECHO;
-                }
                 if (rx_us)
                         *rx_us = rx_time(p, have_tv ? &tv : NULL);
                 return 1;

@@ -15,7 +15,9 @@
  *    Error frames never come out of recv(): they update the status.
  *    When status() says tx_echo, recv() also returns each frame we sent,
  *    flagged LSS_FRAME_ECHO, in its place among the received frames once
- *    the controller has put it on the wire (tx confirmation).
+  *    the controller has put it on the wire (tx confirmation). LSS requests
+ *    (0x7E5) of other senders come out too, unflagged: another master on
+ *    the bus, which the caller must notice (lss_is_foreign_request()).
  *  - rx times and now() are the same clock (CLOCK_MONOTONIC µs, or the
  *    virtual clock of a simulated bus). An rx time is never later than the
  *    moment the frame was really received, so the engine's drain rule

@@ -18,6 +18,7 @@ int lssconf_new(lssconf **ret) {
         c->lss_timeout_ms = LSSCONF_LSS_TIMEOUT_MS_DEFAULT;
         c->lss_timing = LSSCONF_LSS_TIMING_ADAPTIVE;
         c->boot_ready_limit_s = LSSCONF_BOOT_READY_LIMIT_S_DEFAULT;
+        c->foreign_master_quiet_s = LSSCONF_FOREIGN_MASTER_QUIET_S_DEFAULT;
         *ret = c;
         return 0;
 }
@@ -38,6 +39,7 @@ int lssconf_add_default_bus(lssconf *c, const char *ifname, lssconf_bus **ret) {
                 .bitrate = LSSCONF_BITRATE_DEFAULT,
                 .lss_timeout_ms = c->lss_timeout_ms,
                 .lss_timing = c->lss_timing,
+                .foreign_master_quiet_s = c->foreign_master_quiet_s,
                 .store = true,
                 .unknown = LSSCONF_UNKNOWN_IGNORE,
         };
@@ -116,12 +118,12 @@ const char *lssconf_bus_describe(const lssconf_bus *b, char *buf, size_t size) {
         snprintf(buf, size,
                  "%s: %" PRIu32 " bit/s, %zu mapped device%s%s, auto-assign %s, store %s, "
                  "unknown devices: %s, nmt-stop %s, replace %s, reset after pass %s, bit-rate change %s, "
-                 "LSS timeout %" PRIu32 " ms (%s)",
+                 "LSS timeout %" PRIu32 " ms (%s), quiet after another master %" PRIu32 " s",
                  b->interface, b->bitrate, b->n_devices, b->n_devices == 1 ? "" : "s", dcf,
                  b->auto_assign ? "on" : "off", b->store ? "on" : "off", unknown,
                  b->nmt_stop ? "on" : "off", b->replace ? "on" : "off", b->reset_after_pass ? "on" : "off",
                  b->bitrate_change ? "allowed" : "off",
-                 b->lss_timeout_ms, lssconf_lss_timing_to_string(b->lss_timing));
+                 b->lss_timeout_ms, lssconf_lss_timing_to_string(b->lss_timing), b->foreign_master_quiet_s);
         return buf;
 }
 

@@ -7,6 +7,7 @@
  *   lss_timeout_ms = 20;        # optional, 1..10000, default 20
  *   lss_timing = "adaptive";    # optional, "adaptive" (default) | "fixed"
  *   boot_ready_limit_s = 1800;  # optional, 1..86400, default 1800
+ *   foreign_master_quiet_s = 3; # optional, 1..3600, default 3 (per bus too: 0 = the global)
  *   buses = ( { interface = "can0"; ... devices = ( { ... }, ... ); dcf = [ "GLOB", ... ]; }, ... );
  *
  * A bus's map is its `devices` and the entries of the CiA 306 DCFs its
@@ -32,6 +33,10 @@
 /* READY=1 at the latest this long after start-up, boot passes or not */
 #define LSSCONF_BOOT_READY_LIMIT_S_DEFAULT 1800u
 #define LSSCONF_BOOT_READY_LIMIT_S_MAX 86400u
+/* After another LSS master's request, a bus takes no LSS job until it heard
+ * none for this long (and a job it heard one in ends at once) */
+#define LSSCONF_FOREIGN_MASTER_QUIET_S_DEFAULT 3u
+#define LSSCONF_FOREIGN_MASTER_QUIET_S_MAX 3600u
 #define LSSCONF_SIZE_MAX (16u * 1024u * 1024u) /* bigger files are refused */
 
 typedef enum lssconf_unknown_policy {
@@ -57,6 +62,7 @@ typedef struct lssconf_bus {
         uint32_t bitrate;            /* bit/s, a CiA 301 table-0 rate */
         uint32_t lss_timeout_ms;     /* resolved: the bus value or the global one */
         lssconf_lss_timing lss_timing;  /* resolved like lss_timeout_ms */
+        uint32_t foreign_master_quiet_s; /* resolved like lss_timeout_ms: 1..LSSCONF_FOREIGN_MASTER_QUIET_S_MAX */
         bool auto_assign;            /* run the assignment pass at start */
         bool store;                  /* Store Configuration after assigning */
         bool nmt_stop;               /* NMT Stop all before LSS */
@@ -78,6 +84,7 @@ typedef struct lssconf {
         uint32_t lss_timeout_ms;
         lssconf_lss_timing lss_timing;
         uint32_t boot_ready_limit_s; /* 1..LSSCONF_BOOT_READY_LIMIT_S_MAX */
+        uint32_t foreign_master_quiet_s; /* 1..LSSCONF_FOREIGN_MASTER_QUIET_S_MAX */
         lssconf_bus *buses;
         size_t n_buses;
         char **sources;              /* the DCFs map entries came from */
@@ -125,7 +132,7 @@ const lssconf_device *lssconf_bus_find_node_id(const lssconf_bus *b, uint8_t nod
 
 /* One line for the daemon log, e.g. "can0: 250000 bit/s, 3 mapped devices,
  * auto-assign, store, unknown devices: pool 100..110, ...". Returns buf. */
-#define LSSCONF_BUS_DESCRIBE_MAX 320u
+#define LSSCONF_BUS_DESCRIBE_MAX 352u
 const char *lssconf_bus_describe(const lssconf_bus *b, char *buf, size_t size);
 
 /* Linux rules: 1..15 bytes, not "." or "..", no '/', ':', whitespace or

@@ -22,10 +22,12 @@ typedef struct loader {
         int oom; /* -ENOMEM once an allocation failed */
 } loader;
 
-static const char *const root_keys[] = { "lss_timeout_ms", "lss_timing", "boot_ready_limit_s", "buses", NULL };
+static const char *const root_keys[] = { "lss_timeout_ms", "lss_timing", "boot_ready_limit_s", "foreign_master_quiet_s",
+                                         "buses", NULL };
 static const char *const bus_keys[] = {
         "interface", "bitrate", "auto_assign", "store", "unknown", "pool", "nmt_stop", "replace", "reset_after_pass",
-        "lss_timeout_ms", "lss_timing", "vendor", "product", "bitrate_change", "devices", "dcf", NULL
+        "lss_timeout_ms", "lss_timing", "foreign_master_quiet_s", "vendor", "product", "bitrate_change", "devices",
+        "dcf", NULL
 };
 static const char *const device_keys[] = { "vendor", "product", "revision", "serial", "node_id", NULL };
 
@@ -460,6 +462,7 @@ static void parse_bus(loader *l, const config_setting_t *g, const lssconf *c,
                 .bitrate = LSSCONF_BITRATE_DEFAULT,
                 .lss_timeout_ms = c->lss_timeout_ms,
                 .lss_timing = c->lss_timing,
+                .foreign_master_quiet_s = c->foreign_master_quiet_s,
                 .store = true,
                 .unknown = LSSCONF_UNKNOWN_IGNORE,
                 .line = setting_line(g),
@@ -488,6 +491,8 @@ static void parse_bus(loader *l, const config_setting_t *g, const lssconf *c,
         if (get_integer(l, g, "lss_timeout_ms", 0, LSSCONF_LSS_TIMEOUT_MS_MAX, &v, NULL) > 0 && v > 0)
                 b->lss_timeout_ms = (uint32_t) v;
         (void) get_lss_timing(l, g, &b->lss_timing);
+        if (get_integer(l, g, "foreign_master_quiet_s", 0, LSSCONF_FOREIGN_MASTER_QUIET_S_MAX, &v, NULL) > 0 && v > 0)
+                b->foreign_master_quiet_s = (uint32_t) v;
 
         r = get_u32(l, g, "vendor", &def.vendor);
         def.has_vendor = b->has_vendor = r > 0;
@@ -516,6 +521,8 @@ static void parse_root(loader *l, const config_setting_t *root, lssconf *c, lssc
         (void) get_lss_timing(l, root, &c->lss_timing);
         if (get_integer(l, root, "boot_ready_limit_s", 1, LSSCONF_BOOT_READY_LIMIT_S_MAX, &v, NULL) > 0)
                 c->boot_ready_limit_s = (uint32_t) v;
+        if (get_integer(l, root, "foreign_master_quiet_s", 1, LSSCONF_FOREIGN_MASTER_QUIET_S_MAX, &v, NULL) > 0)
+                c->foreign_master_quiet_s = (uint32_t) v;
 
         buses = config_setting_get_member(root, "buses");
         if (!buses) {

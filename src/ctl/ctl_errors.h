@@ -7,7 +7,7 @@
 
 #include "names/lssd_names.h"
 
-/* The exit status of each lssd error, CTL_EXIT_<SYMBOL> (5..14, 16, 18),
+/* The exit status of each lssd error, CTL_EXIT_<SYMBOL> (5..14, 16, 18, 19),
  * comes from its row in names/lssd_names.h. */
 #define CTL_EXIT_ENTRY(sym, errno_, exit_status, sentence) CTL_EXIT_##sym = exit_status,
 enum {

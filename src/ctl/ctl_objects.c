@@ -86,6 +86,24 @@ static int read_last_pass(sd_bus_message *m, ctl_bus_info *b) {
         return r < 0 ? r : 1;
 }
 
+/* ForeignMaster (btts); 1: read, 0: another type (skip) */
+static int read_foreign(sd_bus_message *m, ctl_bus_info *b) {
+        const char *contents, *frame;
+        int active;
+        char t;
+        int r = sd_bus_message_peek_type(m, &t, &contents);
+        if (r < 0)
+                return r;
+        if (t != 'v' || !contents || strcmp(contents, "(btts)") != 0)
+                return 0;
+        r = sd_bus_message_read(m, "v", "(btts)", &active, &b->foreign_since, &b->foreign_last, &frame);
+        if (r < 0)
+                return r;
+        b->foreign_active = active;
+        snprintf(b->foreign_frame, sizeof(b->foreign_frame), "%s", frame);
+        return 1;
+}
+
 static int bus_prop(sd_bus_message *m, const char *name, void *userdata) {
         ctl_bus_info *b = userdata;
         int r;
@@ -104,6 +122,8 @@ static int bus_prop(sd_bus_message *m, const char *name, void *userdata) {
                 return read_typed(m, 'd', &b->progress);
         if (strcmp(name, "LastPass") == 0)
                 return read_last_pass(m, b);
+        if (strcmp(name, "ForeignMaster") == 0)
+                return read_foreign(m, b);
         return 0;
 }
 

@@ -22,6 +22,10 @@ typedef struct ctl_bus_info {
         char pass_kind[8];                     /* "boot" or "call" */
         char pass_result[24];
         char pass_counts[160];                 /* "6 assigned, 2 unchanged" (non-zero ones) */
+        /* ForeignMaster: another LSS master; since 0 when none was heard */
+        bool foreign_active;
+        uint64_t foreign_since, foreign_last;  /* µs since the epoch */
+        char foreign_frame[32];
 } ctl_bus_info;
 
 typedef struct ctl_device_info {

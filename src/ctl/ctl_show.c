@@ -132,6 +132,20 @@ static void status_json(ctl_context *c, const ctl_objects *o) {
                         ctl_json_object_end(&j);
                 } else
                         ctl_json_null(&j);
+                ctl_json_key(&j, "foreign_master");
+                if (b->foreign_since) {
+                        ctl_json_object_begin(&j);
+                        ctl_json_key(&j, "active");
+                        ctl_json_bool(&j, b->foreign_active);
+                        ctl_json_key(&j, "since");
+                        ctl_json_uint(&j, b->foreign_since);
+                        ctl_json_key(&j, "last");
+                        ctl_json_uint(&j, b->foreign_last);
+                        ctl_json_key(&j, "frame");
+                        ctl_json_string(&j, b->foreign_frame);
+                        ctl_json_object_end(&j);
+                } else
+                        ctl_json_null(&j);
                 ctl_json_object_end(&j);
         }
         ctl_json_array_end(&j);
@@ -207,6 +221,20 @@ static void status_text(ctl_context *c, const ctl_objects *o) {
                                b->pass_result, *b->pass_counts ? ", " : "", b->pass_counts);
                 } else
                         printf("none since lssd started\n");
+                if (b->foreign_since) {
+                        /* another LSS master: the line only once one was heard */
+                        char last[32], since[32];
+                        ctl_format_time(b->foreign_last, last, sizeof(last));
+                        ctl_format_time(b->foreign_since, since, sizeof(since));
+                        field(c, "Other master");
+                        if (b->foreign_active) {
+                                colored(c, CTL_ANSI_RED, "another LSS master active");
+                                printf(", last heard %s.%03u: %s (since %s); LSS jobs are refused until it is quiet\n",
+                                       last, (unsigned) (b->foreign_last % 1000000u / 1000u), b->foreign_frame, since);
+                        } else
+                                printf("none active; another LSS master was last heard %s.%03u: %s\n", last,
+                                       (unsigned) (b->foreign_last % 1000000u / 1000u), b->foreign_frame);
+                }
         }
 }
 

@@ -30,7 +30,11 @@ static void help(void) {
                "     --simulate          Simulated in-memory buses instead of SocketCAN (tests, demos)\n"
                "     --sim-slave IFACE:VENDOR:PRODUCT:REVISION:SERIAL[:NODEID[:PROFILE]]\n"
                "                         A simulated slave on simulated bus IFACE (implies --simulate);\n"
-               "                         PROFILE: " SIMBUS_PROFILES "\n",
+               "                         PROFILE: " SIMBUS_PROFILES "\n"
+               "     --sim-foreign-master IFACE:AFTER[:COUNT[:PERIOD_MS]]\n"
+               "                         Another LSS master on simulated bus IFACE: once lssd wrote AFTER LSS\n"
+               "                         requests there (@CS: its first with that cs), COUNT requests\n"
+               "                         " SIMBUS_FOREIGN_FRAME ", PERIOD_MS apart\n",
                LSSD_DEFAULT_CONFIG, LSSD_QUEUE_MAX_DEFAULT, LSSCONF_LSS_TIMEOUT_MS_DEFAULT);
 }
 
@@ -41,6 +45,7 @@ enum {
         ARG_LSS_TIMEOUT,
         ARG_SIMULATE,
         ARG_SIM_SLAVE,
+        ARG_SIM_FOREIGN_MASTER,
 };
 
 static int add_bus_name(lssd_args *a, const char *name) {
@@ -70,6 +75,7 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                 { "lss-timeout", required_argument, NULL, ARG_LSS_TIMEOUT },
                 { "simulate", no_argument, NULL, ARG_SIMULATE },
                 { "sim-slave", required_argument, NULL, ARG_SIM_SLAVE },
+                { "sim-foreign-master", required_argument, NULL, ARG_SIM_FOREIGN_MASTER },
                 {}
         };
         int c, r;
@@ -145,6 +151,21 @@ static int parse_argv(int argc, char *argv[], lssd_args *a) {
                         r = add_bus_name(a, s.ifname);
                         if (r < 0)
                                 return log_error_errno(r, "Out of memory");
+                        break;
+                }
+                case ARG_SIM_FOREIGN_MASTER: {
+                        simbus_foreign f;
+                        if (simbus_foreign_parse(optarg, &f) < 0) {
+                                log_error("Invalid --sim-foreign-master '%s': IFACE:AFTER[:COUNT[:PERIOD_MS]] (AFTER "
+                                          "0..1000000 or @CS 0..255, COUNT 1..100000, PERIOD_MS 1..60000)", optarg);
+                                return -EINVAL;
+                        }
+                        simbus_foreign *v = realloc(a->sim_foreign, (a->n_sim_foreign + 1) * sizeof(*v));
+                        if (!v)
+                                return log_error_errno(-ENOMEM, "Out of memory");
+                        a->sim_foreign = v;
+                        a->sim_foreign[a->n_sim_foreign++] = f;
+                        a->simulate = true;
                         break;
                 }
                 case '?':

@@ -27,6 +27,8 @@ typedef struct lssd_args {
         size_t n_buses;
         lssd_sim_slave *sim_slaves;
         size_t n_sim_slaves;
+        simbus_foreign *sim_foreign; /* --sim-foreign-master: another LSS master on a simulated bus */
+        size_t n_sim_foreign;
         bool simulate;             /* every bus is an in-memory one */
         bool check_config;
         size_t queue_max;

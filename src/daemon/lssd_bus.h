@@ -111,13 +111,27 @@ const char *lssd_bus_holder(const lssd_bus *b);
 bool lssd_bus_removing(const lssd_bus *b);
 void lssd_bus_set_removing(lssd_bus *b, bool removing);
 
+/* Another LSS master on the bus (property ForeignMaster). */
+typedef struct lssd_bus_foreign {
+        bool active;                /* heard within foreign_master_quiet_s: LSS jobs are refused */
+        uint64_t since_us;          /* CLOCK_REALTIME: the first request of this (or the last) episode; 0: never */
+        uint64_t last_us;           /* CLOCK_REALTIME: the last request */
+        char frame[32];             /* the last request, as candump writes it */
+        uint64_t count;             /* requests heard since lssd started */
+} lssd_bus_foreign;
+/* What ForeignMaster says (while requests keep coming, brought up to date
+ * at most once a second). */
+void lssd_bus_foreign_get(const lssd_bus *b, lssd_bus_foreign *ret);
+
 /* The boot pass of a bus, for READY=1 and STATUS= (lssd_context_ready.c). */
 typedef struct lssd_bus_boot {
         bool pending;               /* the boot pass has not ended yet */
         lss_link_state link;
         const char *status;         /* how it ended, NULL before */
         uint64_t pass_started_us;   /* of the running AutoAssign, CLOCK_REALTIME */
-        uint64_t engine_steps;
+        uint64_t engine_steps;      /* and another master's requests: waiting for its quiet is no stall */
         unsigned lss_timeout_ms;
+        bool foreign;               /* another LSS master is active: the pass waits for its quiet */
+        uint64_t foreign_since_us;  /* CLOCK_REALTIME: since when */
 } lssd_bus_boot;
 void lssd_bus_boot_get(const lssd_bus *b, lssd_bus_boot *ret);

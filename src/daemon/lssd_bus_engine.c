@@ -59,7 +59,13 @@ static void bus_job_end(lssd_bus *b) {
         b->job = NULL;
         b->changed |= LSSD_BUS_CHANGED_JOB;
         bus_set_progress(b, 0);
-        if (j->type == LSSD_JOB_AUTO_ASSIGN && j->boot) {
+        if (j->type == LSSD_JOB_AUTO_ASSIGN && j->boot && j->result && strcmp(j->result, "foreign-master") == 0 &&
+            !b->removing && !b->host.ops->stopping(b->host.userdata)) {
+                /* another master broke it off: it runs again once that one is quiet */
+                log_notice("%s: the boot pass runs again once no LSS request of another master was heard for %u s",
+                           b->ifname, b->config->foreign_master_quiet_s);
+                bus_queue_boot_pass(b);
+        } else if (j->type == LSSD_JOB_AUTO_ASSIGN && j->boot) {
                 /* finished or gave up: either way the boot pass is over */
                 char *text = NULL;
                 if (j->summary[0] && j->result && strcmp(j->result, "partial") != 0 &&
@@ -83,6 +89,10 @@ static void bus_job_end(lssd_bus *b) {
 }
 
 static void bus_job_continue(lssd_bus *b, const lss_result *r) {
+        lss_result foreign;
+        /* another master ended it: the bus's words, and the slaves it left set aside */
+        if (r && r->status == LSS_E_FOREIGN_MASTER)
+                r = bus_foreign_result(b, r, &foreign);
         int k = lssd_job_run(&b->env, b->job, r);
         if (k > 0)
                 b->engine_running = true;
@@ -121,7 +131,8 @@ void bus_process(lssd_bus *b) {
                         bus_job_continue(b, lss_master_result(b->engine));
                         continue;
                 }
-                if (!b->job && !b->engine_running && b->queue.n > 0) {
+                /* another master is active: only a switch to waiting goes out */
+                if (!b->job && !b->engine_running && b->queue.n > 0 && !bus_foreign_holds(b)) {
                         bus_job_begin(b, lssd_job_queue_pop(&b->queue));
                         continue;
                 }
@@ -156,6 +167,10 @@ static void bus_poll_rx(lssd_bus *b) {
                         /* our own request came back from the controller */
                         if (lss_tx_echo_confirms(&b->echo, &f, rx))
                                 lss_master_on_tx_confirmed(b->engine, rx);
+                } else if (lss_is_foreign_request(&f)) {
+                        /* another master's: the bus stops taking jobs, the engine ends its own */
+                        bus_foreign_heard(b, &f);
+                        lss_master_on_frame(b->engine, &f, rx);
                 } else {
                         lssd_unstored_note(&b->env.unstored, &f, rx);
                         lssd_heard_rx(&b->heard, &f, lssd_realtime_us());

@@ -244,6 +244,7 @@ lssd_bus *lssd_bus_free(lssd_bus *b) {
         b->timer_source = sd_event_source_disable_unref(b->timer_source);
         b->tx_retry_source = sd_event_source_disable_unref(b->tx_retry_source);
         bus_retune_free(b);
+        bus_foreign_free(b);
         lss_transport_close(&b->transport);
         lss_master_free(b->engine);
         lssd_bus_config_free(b->config);

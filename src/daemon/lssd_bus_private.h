@@ -26,6 +26,11 @@
 #define LSSD_BUS_CHANGED_PROGRESS     (1u << 3)
 #define LSSD_BUS_CHANGED_QUEUE_LENGTH (1u << 4)
 #define LSSD_BUS_CHANGED_LAST_PASS    (1u << 5)
+#define LSSD_BUS_CHANGED_FOREIGN      (1u << 6)
+
+/* While another master's requests keep coming, ForeignMaster is published
+ * at most this often (its start and end at once). */
+#define LSSD_FOREIGN_PUBLISH_US 1000000u
 
 struct lssd_bus {
         lssd_bus_host host;              /* the daemon around it */
@@ -82,6 +87,15 @@ struct lssd_bus {
 
         char *boot_status;               /* how the boot pass ended, for STATUS= */
         lssd_heard heard;                /* node-IDs other devices speak under */
+
+        struct {                         /* another LSS master (lssd_bus_foreign.c) */
+                lssd_bus_foreign now;    /* what was heard */
+                lssd_bus_foreign pub;    /* what ForeignMaster says */
+                uint64_t last_at;        /* the last request (the transport's clock): quiet from then */
+                uint64_t pub_at;         /* ForeignMaster last changed (the transport's clock) */
+                uint64_t episode_count;  /* requests heard in this episode */
+                sd_event_source *timer;  /* the end of the quiet */
+        } foreign;
 };
 
 /* lssd_bus_lifecycle.c: the transport's clock, the engine's timing */
@@ -112,6 +126,29 @@ void bus_queue_boot_pass(lssd_bus *b);
 
 /* lssd_bus_holder.c */
 void bus_on_holder_gone(lssd_holder *h, void *userdata);
+
+/* lssd_bus_foreign.c: another LSS master. A request heard (not ours):
+ * the bus refuses LSS jobs, those queued for callers are answered
+ * ForeignMaster, the running one ends (the engine's part), until none was
+ * heard for foreign_master_quiet_s. */
+void bus_foreign_heard(lssd_bus *b, const lss_frame *f);
+/* 0, or ForeignMaster naming the last request while the quiet is not over. */
+int bus_foreign_refuse(lssd_bus *b, sd_bus_error *error);
+/* The job at the head of the queue waits for the quiet (all but a Reset). */
+bool bus_foreign_holds(const lssd_bus *b);
+/* The engine ended the running job with LSS_E_FOREIGN_MASTER: `r` in *copy
+ * with the bus's words (interface, frame, time), and the slaves it left set
+ * aside queued for a GiveBack once the quiet is over. */
+const lss_result *bus_foreign_result(lssd_bus *b, const lss_result *r, lss_result *copy);
+/* "another LSS master is active on can0: 7E5#... at 12:03:04.512" */
+void bus_foreign_text(const lssd_bus *b, char *buf, size_t size);
+void bus_foreign_free(lssd_bus *b);
+
+/* lssd_bus_queue.c: put an internal job first, behind those of the kinds
+ * in `behind` (bit LSSD_JOB_x) at the head */
+void bus_queue_front(lssd_bus *b, lssd_job *j, unsigned behind);
+/* answers every queued job of a caller with `error` (JobFinished `result`) */
+void bus_queue_abort_requests(lssd_bus *b, const char *error, const char *result, const char *why);
 
 /* lssd_bus_link.c: the host interface */
 void bus_on_link_state(void *userdata, lss_link_state old_state, lss_link_state new_state);

@@ -52,7 +52,7 @@ void bus_update_published(lssd_bus *b) {
 }
 
 void bus_flush_changes(lssd_bus *b) {
-        char *names[7];
+        char *names[8];
         size_t n = 0;
 
         if (!b->changed || !b->host.dbus || !b->slot)
@@ -69,6 +69,8 @@ void bus_flush_changes(lssd_bus *b) {
                 names[n++] = (char *) "QueueLength";
         if (b->changed & LSSD_BUS_CHANGED_LAST_PASS)
                 names[n++] = (char *) "LastPass";
+        if (b->changed & LSSD_BUS_CHANGED_FOREIGN)
+                names[n++] = (char *) "ForeignMaster";
         names[n] = NULL;
         b->changed = 0;
         int r = sd_bus_emit_properties_changed_strv(b->host.dbus, b->path, LSSD_BUS_IFACE, names);

@@ -24,7 +24,44 @@ int lssd_bus_check_available(lssd_bus *b, const char *sender, bool raw, sd_bus_e
                                          b->link == LSS_LINK_GONE ? "not there" : "down");
         if (b->bus_state == LSS_BUS_OFF)
                 return sd_bus_error_setf(error, LSSD_ERROR_BUS_OFF, "%s: the controller is bus-off", b->ifname);
-        return 0;
+        return bus_foreign_refuse(b, error);
+}
+
+/* Internal jobs that must precede everything queued go first, behind those
+ * of the kinds in `behind` already at the head (a Reset before all). */
+void bus_queue_front(lssd_bus *b, lssd_job *j, unsigned behind) {
+        lssd_job *head[8];
+        size_t n = 0;
+        while (n < sizeof(head) / sizeof(head[0]) && b->queue.head && (behind & (1u << b->queue.head->type)))
+                head[n++] = lssd_job_queue_pop(&b->queue);
+        lssd_job_queue_push_front(&b->queue, j);
+        while (n > 0)
+                lssd_job_queue_push_front(&b->queue, head[--n]);
+        b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
+}
+
+/* Drops queued jobs, every one (`all`) or those of callers; each caller is
+ * answered `error` and told by JobFinished `result`. */
+static void drop_queued(lssd_bus *b, bool all, const char *error, const char *result, const char *why) {
+        lssd_job *j, *next;
+        for (j = b->queue.head; j; j = next) {
+                next = j->next;
+                if (!all && !j->request)
+                        continue;
+                lssd_job_queue_remove(&b->queue, j);
+                b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
+                if (j->request) {
+                        lssd_job_abort(j, error, why);
+                        if (b->host.dbus && b->slot)
+                                (void) sd_bus_emit_signal(b->host.dbus, b->path, LSSD_BUS_IFACE,
+                                                          LSSD_SIGNAL_JOB_FINISHED, "ss", lssd_job_name(j), result);
+                }
+                lssd_job_free(j);
+        }
+}
+
+void bus_queue_abort_requests(lssd_bus *b, const char *error, const char *result, const char *why) {
+        drop_queued(b, false, error, result, why);
 }
 
 void bus_queue_reset(lssd_bus *b, bool front) {
@@ -47,7 +84,7 @@ void bus_queue_reset(lssd_bus *b, bool front) {
 
 /* The boot pass goes right behind the switch to waiting at the head. */
 void bus_queue_boot_pass(lssd_bus *b) {
-        lssd_job *j, *reset;
+        lssd_job *j;
 
         if (!b->env.boot_pending || b->removing || b->host.ops->stopping(b->host.userdata))
                 return;
@@ -65,11 +102,8 @@ void bus_queue_boot_pass(lssd_bus *b) {
         }
         j->boot = true;
         j->id = b->host.ops->next_job_id(b->host.userdata);
-        reset = b->queue.head && b->queue.head->type == LSSD_JOB_RESET ? lssd_job_queue_pop(&b->queue) : NULL;
-        lssd_job_queue_push_front(&b->queue, j);
-        if (reset)
-                lssd_job_queue_push_front(&b->queue, reset);
-        b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
+        /* behind the switch to waiting, and 255 back to slaves a pass broken off left set aside */
+        bus_queue_front(b, j, 1u << LSSD_JOB_RESET | 1u << LSSD_JOB_GIVE_BACK);
 }
 
 int lssd_bus_submit(lssd_bus *b, lssd_job *j, sd_bus_error *error) {
@@ -96,17 +130,7 @@ int lssd_bus_queue_job(lssd_bus *b, sd_bus_message *m, lssd_job *j, bool raw, sd
 /* ---- stopping ---- */
 
 void lssd_bus_stop(lssd_bus *b, const char *why) {
-        lssd_job *j;
-        while ((j = lssd_job_queue_pop(&b->queue))) {
-                if (j->request) {
-                        lssd_job_abort(j, LSSD_ERROR_CANCELLED, why);
-                        if (b->host.dbus && b->slot)
-                                (void) sd_bus_emit_signal(b->host.dbus, b->path, LSSD_BUS_IFACE,
-                                                          LSSD_SIGNAL_JOB_FINISHED, "ss", lssd_job_name(j),
-                                                          "cancelled");
-                }
-                lssd_job_free(j);
-        }
+        drop_queued(b, true, LSSD_ERROR_CANCELLED, "cancelled", why);
         b->changed |= LSSD_BUS_CHANGED_QUEUE_LENGTH;
         if (b->holder.name) {
                 log_info("%s: dropping holder %s: %s", b->ifname, b->holder.name, why);

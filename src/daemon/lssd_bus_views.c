@@ -144,7 +144,9 @@ void lssd_bus_boot_get(const lssd_bus *b, lssd_bus_boot *ret) {
                 .link = b->link,
                 .status = b->boot_status,
                 .pass_started_us = b->env.pass_started_us,
-                .engine_steps = lss_master_get_stats(b->engine)->steps,
+                .engine_steps = lss_master_get_stats(b->engine)->steps + b->foreign.now.count,
                 .lss_timeout_ms = b->config->lss_timeout_ms,
+                .foreign = b->foreign.now.active,
+                .foreign_since_us = b->foreign.now.since_us,
         };
 }

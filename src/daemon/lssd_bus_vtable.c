@@ -58,6 +58,13 @@ static int property_get_last_pass(sd_bus *bus, const char *path, const char *int
         return r;
 }
 
+static int property_get_foreign_master(sd_bus *bus, const char *path, const char *interface, const char *property,
+                                       sd_bus_message *reply, void *userdata, sd_bus_error *error) {
+        lssd_bus_foreign f;
+        lssd_bus_foreign_get(userdata, &f);
+        return sd_bus_message_append(reply, "(btts)", f.active, f.since_us, f.last_us, f.frame);
+}
+
 static int property_get_queue_length(sd_bus *bus, const char *path, const char *interface, const char *property,
                                      sd_bus_message *reply, void *userdata, sd_bus_error *error) {
         const lssd_bus *b = userdata;
@@ -333,6 +340,8 @@ const sd_bus_vtable lssd_bus_vtable[] = {
         SD_BUS_PROPERTY("Progress", "d", property_get_progress, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("LastPass", "(ttssa{su})", property_get_last_pass, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
         SD_BUS_PROPERTY("QueueLength", "u", property_get_queue_length, 0, SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
+        SD_BUS_PROPERTY("ForeignMaster", "(btts)", property_get_foreign_master, 0,
+                        SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE),
 
         SD_BUS_METHOD_WITH_ARGS("Scan",
                                 SD_BUS_ARGS("a{sv}", options),

@@ -24,6 +24,7 @@ void lssd_args_done(lssd_args *a) {
                 free(a->buses[i]);
         free(a->buses);
         free(a->sim_slaves);
+        free(a->sim_foreign);
         *a = (lssd_args) { 0 };
 }
 

@@ -34,11 +34,22 @@ void lssd_ready_status(lssd_context *ctx, bool ready) {
                 if (lssd_bus_removing(b))
                         continue;
                 lssd_bus_boot_get(b, &boot);
-                if (boot.pending && boot.link == LSS_LINK_UP)
+                char since[32];
+                if (boot.foreign)
+                        lssd_clock_text(boot.foreign_since_us, since, sizeof(since));
+                if (boot.pending && boot.link == LSS_LINK_UP && boot.foreign)
+                        n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s: auto-assign waits until "
+                                               "another LSS master (active since %s) is quiet for %u s",
+                                               lssd_bus_ifname(b), since,
+                                               lssd_bus_config_of(b)->foreign_master_quiet_s);
+                else if (boot.pending && boot.link == LSS_LINK_UP)
                         n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s: auto-assigning", lssd_bus_ifname(b));
+                else if (boot.foreign)
+                        n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s: another LSS master active "
+                                               "since %s", lssd_bus_ifname(b), since);
                 else if (boot.pending)
                         n += (size_t) snprintf(status + n, sizeof(status) - n, "; waiting for %s", lssd_bus_ifname(b));
-                else if (boot.status)
+                if (!boot.pending && boot.status && n < sizeof(status))
                         n += (size_t) snprintf(status + n, sizeof(status) - n, "; %s", boot.status);
         }
         /* the line first: whoever sees READY=1 finds it in the log already */

@@ -48,6 +48,7 @@ static const struct {
         [LSS_E_VERIFY] = { LSSD_ERROR_NO_RESPONSE, "not-verified" },
         /* several slaves disturbed each other's answers */
         [LSS_E_INCOMPLETE] = { LSSD_ERROR_CONFLICT, "incomplete" },
+        [LSS_E_FOREIGN_MASTER] = { LSSD_ERROR_FOREIGN_MASTER, "foreign-master" },
 };
 
 const char *lssd_status_to_error_name(enum lss_status s) {

@@ -23,6 +23,8 @@ const char *lssd_job_name(const lssd_job *j) {
                 return "SetBitrate";
         case LSSD_JOB_UNASSIGN:
                 return "UnassignNodeId";
+        case LSSD_JOB_GIVE_BACK:
+                return "GiveBack";
         default:
                 return "?";
         }
@@ -67,6 +69,7 @@ lssd_job *lssd_job_free(lssd_job *j) {
         free(j->notes);
         free(j->map);
         free(j->br_devices);
+        free(j->aside);
         free(j);
         return NULL;
 }

@@ -26,6 +26,9 @@ typedef enum lssd_job_type {
         LSSD_JOB_AUTO_ASSIGN, /* AutoAssign() or the boot pass: make the bus match the map */
         LSSD_JOB_SET_BITRATE, /* SetBitrate(): scan, then the whole network to a new rate (lssd_bitrate.c) */
         LSSD_JOB_UNASSIGN, /* UnassignNodeId(): back to non-configured */
+        /* internal: 255 back to slaves a job broken off by another master
+         * left with the temporary node-ID an enumeration set them aside with */
+        LSSD_JOB_GIVE_BACK,
         _LSSD_JOB_TYPE_MAX,
 } lssd_job_type;
 
@@ -99,6 +102,10 @@ struct lssd_job {
         lss_bitrate_device *br_devices;
         size_t n_br_devices;
         int retune_error;            /* errno of a failed host retune */
+
+        /* GIVE_BACK: the slaves and their temporary node-IDs (aside_node_id) */
+        lss_device *aside;
+        size_t n_aside;
 };
 
 /* Adds a note to the Scan reply (a copy of text); -ENOMEM. */
@@ -111,7 +118,7 @@ int lssd_job_add_note(lssd_job *j, const char *text);
 bool lssd_job_uncancellable(const lssd_job *j);
 
 /* "Reset", "Scan", "AssignNodeId", the raw method name, "Execute", "AutoAssign",
- * "SetBitrate", "UnassignNodeId". */
+ * "SetBitrate", "UnassignNodeId", "GiveBack". */
 const char *lssd_job_name(const lssd_job *j);
 
 /* A new job; request (may be NULL) is referenced, its sender copied. */

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #define SD_JOURNAL_SUPPRESS_LOCATION
 #include <systemd/sd-journal.h>
 
@@ -76,4 +77,14 @@ void lssd_log_device(int priority, const char *ifname, const lss_identity *id, u
                             "LSS_NODE_ID=%u", node_id, NULL) >= 0)
                 return;
         emit(priority, buf);
+}
+
+const char *lssd_clock_text(uint64_t realtime_us, char *buf, size_t size) {
+        time_t t = (time_t) (realtime_us / 1000000u);
+        struct tm tm;
+        char hms[16];
+        if (!localtime_r(&t, &tm) || strftime(hms, sizeof(hms), "%H:%M:%S", &tm) == 0)
+                snprintf(hms, sizeof(hms), "?");
+        snprintf(buf, size, "%s.%03u", hms, (unsigned) (realtime_us % 1000000u / 1000u));
+        return buf;
 }

@@ -5,6 +5,8 @@
  * LSS_VENDOR=, LSS_PRODUCT=, LSS_REVISION=, LSS_SERIAL=, LSS_NODE_ID=). */
 #pragma once
 
+#include <stddef.h>
+#include <stdint.h>
 #include <syslog.h>
 
 #include "lss/lss_proto.h"
@@ -15,6 +17,9 @@ int lssd_log_errno(int priority, int error, const char *format, ...) __attribute
 /* A line about one device; node_id 0 = not known. */
 void lssd_log_device(int priority, const char *ifname, const lss_identity *id, unsigned node_id, const char *format,
                      ...) __attribute__((format(printf, 5, 6)));
+
+/* A moment (CLOCK_REALTIME µs) as local time of day: "12:03:04.512". Returns buf. */
+const char *lssd_clock_text(uint64_t realtime_us, char *buf, size_t size);
 
 #define log_debug(...)   lssd_log(LOG_DEBUG, __VA_ARGS__)
 #define log_info(...)    lssd_log(LOG_INFO, __VA_ARGS__)

@@ -20,6 +20,8 @@ int lssd_job_run(lssd_job_env *e, lssd_job *j, const lss_result *r) {
                 return lssd_run_bitrate(e, j, r);
         case LSSD_JOB_UNASSIGN:
                 return lssd_run_unassign(e, j, r);
+        case LSSD_JOB_GIVE_BACK:
+                return lssd_run_give_back(e, j, r);
         default:
                 lssd_job_abort(j, SD_BUS_ERROR_FAILED, "Unknown job type");
                 return 0;

@@ -18,6 +18,8 @@ int lssd_job_run(lssd_job_env *e, lssd_job *j, const lss_result *r);
 
 /* The runner of each kind of job, as lssd_job_run(). */
 int lssd_run_reset(lssd_job_env *e, lssd_job *j, const lss_result *r);
+/* 255 back to the slaves in j->aside (lss_master_give_back), lssd_run_raw.c */
+int lssd_run_give_back(lssd_job_env *e, lssd_job *j, const lss_result *r);
 int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r);
 int lssd_run_assign(lssd_job_env *e, lssd_job *j, const lss_result *r);
 int lssd_run_unassign(lssd_job_env *e, lssd_job *j, const lss_result *r);

@@ -176,6 +176,37 @@ static int fill_devices(sd_bus_message *reply, const void *userdata) {
         return k < 0 ? k : sd_bus_message_close_container(reply);
 }
 
+/* Another master ended it (the engine's rules, lss_master.h): past the
+ * activation the devices switched, the host followed, and those verified
+ * before are named; before it nothing was activated, and the devices that
+ * had accepted Configure Bit Timing keep that rate pending. */
+static int foreign_master(lssd_job_env *e, lssd_job *j, const lss_result *r, bool activated, const char *host) {
+        char ids[400] = "";
+        size_t n = 0, len = 0;
+        for (size_t i = 0; i < j->n_br_devices; i++) {
+                const lss_bitrate_device *d = &j->br_devices[i];
+                bool name = activated ? d->outcome == LSS_BITRATE_SWITCHED || d->outcome == LSS_BITRATE_STORED :
+                                        d->outcome == LSS_BITRATE_CONFIGURED;
+                if (!name)
+                        continue;
+                n++;
+                if (len < sizeof(ids))
+                        len += (size_t) snprintf(ids + len, sizeof(ids) - len, "%s%08x:%08x:%08x:%08x", len ? ", " : "",
+                                                 d->id.vendor, d->id.product, d->id.revision, d->id.serial);
+        }
+        if (activated)
+                return fail(e, j, LSSD_ERROR_FOREIGN_MASTER, "foreign-master",
+                            "%s; Activate Bit Timing to %u bit/s had gone out: the devices switched, %zu of %zu "
+                            "verified at the new rate%s%s (the others were not); %s", r->message, j->bitrate,
+                            n, j->n_br_devices, n ? ": " : "", ids, host);
+        return fail(e, j, LSSD_ERROR_FOREIGN_MASTER, "foreign-master",
+                    "%s; nothing was activated, the bus stays at %u bit/s%s%s", r->message, lssd_job_env_bitrate(e),
+                    n ? "; these took (or may have taken) Configure Bit Timing and keep that rate pending, not "
+                        "configured back (a Store Configuration would make it theirs at the next power cycle: "
+                        "power-cycle them): " : "",
+                    ids);
+}
+
 static int finish(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         enum lss_retune rt = lss_master_retune_state(e->engine);
         char host[160];
@@ -209,6 +240,8 @@ static int finish(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (r->status == LSS_E_REJECTED && rt != LSS_RETUNE_NONE)
                 /* switched; only the store failed */
                 return fail(e, j, LSSD_ERROR_REJECTED, "partial", "%s; %s", r->message, host);
+        if (r->status == LSS_E_FOREIGN_MASTER)
+                return foreign_master(e, j, r, rt != LSS_RETUNE_NONE, host);
         /* nothing was activated */
         return fail(e, j, lssd_status_to_error_name(r->status), lssd_status_to_result(r->status),
                     "%s; nothing was activated, the bus stays at %u bit/s", r->message[0] ? r->message :

@@ -26,6 +26,28 @@ int lssd_run_reset(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         return 0;
 }
 
+/* ---- GiveBack: 255 to the slaves a broken-off enumeration set aside ---- */
+
+int lssd_run_give_back(lssd_job_env *e, lssd_job *j, const lss_result *r) {
+        char ident[40];
+        if (!r) {
+                log_notice("%s: giving node-ID 255 back to %zu slave%s that a job broken off by another LSS master "
+                           "left with a temporary node-ID", e->ifname, j->n_aside, j->n_aside == 1 ? "" : "s");
+                int k = lss_master_give_back(e->engine, j->aside, j->n_aside, lssd_job_env_now(e));
+                return k < 0 ? lssd_job_start_failed(e, j, k) : 1;
+        }
+        j->result = lssd_status_to_result(r->status);
+        for (size_t i = 0; i < r->n_devices; i++)
+                lssd_log_device(LOG_INFO, e->ifname, &r->devices[i].id, r->devices[i].node_id,
+                                "%s: device %s: temporary node-ID %u given back, node-ID %u now", e->ifname,
+                                lssd_identity_format(&r->devices[i].id, ident, sizeof(ident)),
+                                r->devices[i].aside_node_id, r->devices[i].node_id);
+        if (r->status != LSS_OK)
+                log_warning("%s: could not give every slave its node-ID 255 back: %s", e->ifname,
+                            r->message[0] ? r->message : lssd_status_to_result(r->status));
+        return 0;
+}
+
 /* ---- raw services of the holder ---- */
 
 static bool sender_holds(lssd_job_env *e, const lssd_job *j) {

@@ -19,6 +19,9 @@ static int open_simulated(const lssd_args *args, const char *ifname, uint32_t bi
                 if (r < 0)
                         break;
         }
+        for (size_t i = 0; r >= 0 && i < args->n_sim_foreign; i++)
+                if (strcmp(args->sim_foreign[i].ifname, ifname) == 0)
+                        simbus_add_foreign(s, &args->sim_foreign[i]);
         simbus_transport(s, ret);
         if (r < 0)
                 lss_transport_close(ret);

@@ -116,6 +116,7 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                 m->result.changed = true;
                 goto dry;
         }
+        s->configuring = true;
         REQUEST_RETRIED_ENDS(m, &s->tail_pc, s->attempt, lss_encode_configure_node_id(&f__, s->node_id),
                              LSS_CS_CONFIGURE_NODE_ID, s->lone);
         if (!configure_answer_ok(m, s->node_id))
@@ -161,6 +162,7 @@ out:
             ((m->result.changed && !m->result.dry) || (m->result.failed_service == LSS_SERVICE_CONFIGURE_NODE_ID &&
                                                        m->result.reason == LSS_REASON_NO_ANSWER)))
                 m->result.may_hold = true;
+        s->configuring = false;
         PT_END(&s->tail_pc);
 }
 

@@ -493,6 +493,25 @@ out:
         PT_END(&s->pc);
 }
 
+void aa_on_foreign(lss_master *m) {
+        lss_aa_state *s = m->aa;
+        if (!s || m->proc != proc_autoassign || !m->as.configuring)
+                return;
+        /* the device whose assignment was under way: its Configure Node-ID
+         * went out, nothing confirmed it, nothing gave it back */
+        lss_outcome *o = aa_outcome_add(s, &m->as.id);
+        if (!o)
+                return;
+        o->kind = LSS_OUTCOME_FAILED;
+        o->status = LSS_E_FOREIGN_MASTER;
+        o->old_node_id = o->new_node_id = m->as.old;
+        o->kept_node_id = m->as.node_id;
+        o->pending_reset = false;
+        snprintf(o->message, sizeof(o->message), "broken off after Configure Node-ID %u (%.200s): the device may "
+                 "hold node-ID %u, which is kept for it", m->as.node_id, m->result.message, m->as.node_id);
+        s->used[m->as.node_id] = true;
+}
+
 int lss_master_autoassign(lss_master *m, const lss_autoassign_plan *plan, uint64_t now) {
         if (!plan || (plan->n_map && !plan->map))
                 return -EINVAL;

@@ -118,8 +118,10 @@ static int configure_each(lss_master *m, lss_bitrate_state *s) {
                                        d->id.revision, d->id.serial);
                         goto out;
                 }
+                s->configuring = true;
                 REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_configure_bit_timing(&f__, 0, s->index),
                                 LSS_CS_CONFIGURE_BIT_TIMING);
+                s->configuring = false;
                 d = &s->p.devices[s->i];
                 if (!step_answered(m)) {
                         d->outcome = LSS_BITRATE_SILENT;
@@ -320,6 +322,15 @@ static int proc_bitrate(lss_master *m) {
         }
         s->cpc = 0;
         PT_CALL(&s->pc, activate(m, s));
+        if (s->foreign) {
+                /* another master spoke in the window: the devices switched,
+                 * the host followed; nothing more but the switch to waiting
+                 * that ends a procedure (at the new rate). The failed service
+                 * says it: Activate Bit Timing had gone out. */
+                master_fail_at(m, LSS_E_FOREIGN_MASTER, LSS_SERVICE_ACTIVATE_BIT_TIMING, LSS_REASON_NONE,
+                               "another LSS master is active (%s)", s->foreign_frame);
+                goto out;
+        }
         s->cpc = 0;
         PT_CALL(&s->pc, verify_each(m, s));
         goto out;
@@ -376,6 +387,19 @@ void lss_master_retune_done(lss_master *m, enum lss_retune how, uint64_t now) {
 
 enum lss_retune lss_master_retune_state(const lss_master *m) {
         return m->br.retune;
+}
+
+bool bitrate_on_foreign(lss_master *m, const char *frame) {
+        if (!lss_master_bitrate_committed(m)) {
+                /* the device asked last may have taken the new rate: it is named as configured */
+                if (m->running && m->proc == proc_bitrate && m->br.configuring && m->br.i < m->br.p.n_devices)
+                        m->br.p.devices[m->br.i].outcome = LSS_BITRATE_CONFIGURED;
+                return false;
+        }
+        if (!m->br.foreign)
+                snprintf(m->br.foreign_frame, sizeof(m->br.foreign_frame), "%s", frame);
+        m->br.foreign = true;
+        return true;
 }
 
 bool lss_master_bitrate_committed(const lss_master *m) {

@@ -685,3 +685,47 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
 out:;
         PT_END(&s->pc);
 }
+
+/* lss_master_give_back(): what an enumeration broken off by another master
+ * did not give back, as at its end. */
+static int proc_give_back_top(lss_master *m) {
+        lss_scan_state *s = &m->sc;
+        PT_BEGIN(&m->pc);
+        s->vpc = 0;
+        PT_CALL(&m->pc, give_back(m, s));
+        if (m->result.status == LSS_OK && s->stuck > 0) {
+                for (s->i = 0; !back_due(s, &s->cand[s->i]); s->i++)
+                        ;
+                m->result.id = s->cand[s->i].id;
+                master_fail(m, LSS_E_INCOMPLETE, "%u slaves kept the temporary node-ID they were set aside "
+                            "with, " ID_FMT " node-ID %u first (reset them or power them off and on)",
+                            s->stuck, ID_ARGS(s->cand[s->i].id), s->cand[s->i].aside_node_id);
+        }
+        PT_END(&m->pc);
+}
+
+int lss_master_give_back(lss_master *m, const lss_device *d, size_t n, uint64_t now) {
+        lss_scan_state *s = &m->sc;
+        if (n > 0 && !d)
+                return -EINVAL;
+        for (size_t i = 0; i < n; i++)
+                if (!lss_node_id_valid(d[i].aside_node_id))
+                        return -EINVAL;
+        if (m->running)
+                return -EBUSY;
+        s->n_cand = s->n_aside = s->n_kept = 0;
+        s->keep_stopped = false;
+        memset(s->back_due, 0, sizeof(s->back_due));
+        for (size_t i = 0; i < n; i++) {
+                if (cand_add(s, &d[i].id) < 0)
+                        return -ENOMEM;
+                s->cand[s->n_cand - 1].aside_node_id = d[i].aside_node_id;
+                s->back_due[d[i].aside_node_id] = true;
+                s->n_aside++;
+        }
+        int r = master_start_procedure(m, proc_give_back_top, now);
+        /* start_op cleared it: a cancel waits for the give-back, as an enumeration's */
+        if (r >= 0 && m->running)
+                s->restore = true;
+        return r;
+}

@@ -156,6 +156,8 @@ typedef struct lss_assign_state {
         bool patient;           /* proc_assign_unverified made the waits patient (and ends it) */
         uint64_t until;         /* unassign: the reset slave must answer 255 by then */
         uint8_t seen;           /* unassign: the node-ID it answered after the reset (0: none) */
+        bool configuring;       /* Configure Node-ID node_id went out, the assignment is not over:
+                                 * broken off now, the slave may hold it */
 } lss_assign_state;
 
 typedef struct lss_range_item {
@@ -260,6 +262,9 @@ typedef struct lss_bitrate_state {
         uint64_t heard_at;      /* the slaves heard Activate Bit Timing (end of the frame on the wire) */
         enum lss_retune retune;
         unsigned answers;       /* global: most answers to one Configure Bit Timing */
+        bool configuring;       /* a Configure Bit Timing to the new rate is out, not answered yet */
+        bool foreign;           /* another master was heard in the committed window */
+        char foreign_frame[32]; /* ... its request */
 } lss_bitrate_state;
 
 typedef int (*lss_proc_fn)(lss_master *m);
@@ -327,6 +332,8 @@ struct lss_master {
         void *found_ud;
         lss_identity *announced;  /* identities found_fn was called for in this operation */
         size_t n_announced, cap_announced;
+        lss_device *left;         /* lss_master_left_aside() */
+        size_t n_left, cap_left;
 };
 
 /* step.c */
@@ -448,6 +455,12 @@ int proc_slowscan(lss_master *m, lss_scan_state *s);
  * once; on failure master_fail() was called and the devices are reverted */
 int proc_bitrate_global_configure(lss_master *m, lss_bitrate_state *s);
 void lss_autoassign_free_state(lss_master *m);
+/* Another master ended the running operation (lss_master.c): the
+ * bit-rate change in its committed window keeps to it and notes the frame
+ * (true; it ends after the window), else false; AutoAssign records the
+ * device whose assignment was under way (Configure Node-ID out). */
+bool bitrate_on_foreign(lss_master *m, const char *frame);
+void aa_on_foreign(lss_master *m);
 void lss_sdo_discover_free_state(lss_master *m);
 /* sdo_discover.c: the SDO identity discovery as a child procedure: set up
  * (only: 128 entries, the node-IDs of the range to ask, or NULL for all),

@@ -22,6 +22,7 @@ const char *lss_status_name(enum lss_status s) {
                 [LSS_E_INVALID] = "invalid",
                 [LSS_E_VERIFY] = "not-verified",
                 [LSS_E_INCOMPLETE] = "incomplete",
+                [LSS_E_FOREIGN_MASTER] = "foreign-master",
         };
         return (unsigned) s < sizeof(names) / sizeof(names[0]) && names[s] ? names[s] : "unknown";
 }
@@ -72,6 +73,7 @@ void lss_master_free(lss_master *m) {
                 return;
         free(m->devices);
         free(m->announced);
+        free(m->left);
         free(m->sc.stack);
         free(m->sc.cand);
         lss_autoassign_free_state(m);
@@ -246,6 +248,8 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
         m->now = now;
         m->n_devices = 0;
         m->n_announced = 0;
+        m->n_left = 0;
+        m->as.configuring = false;
         m->txq_head = m->txq_len = 0;
         memset(&m->result, 0, sizeof(m->result));
         m->result.node_id = LSS_NODE_ID_UNCONFIGURED;
@@ -731,11 +735,70 @@ int lss_master_fastscan_assign(lss_master *m, const lss_fastscan_known *known, u
         return start_op(m, proc_fastscan_assign_top, true, now);
 }
 
+/* ---- another LSS master ---- */
+
+/* The slaves the enumeration set aside and has not given back yet. */
+static void keep_left_aside(lss_master *m) {
+        const lss_scan_state *s = &m->sc;
+        if (!s->restore)
+                return;
+        for (size_t i = 0; i < s->n_cand; i++) {
+                const lss_device *d = &s->cand[i];
+                if (!d->aside_node_id || !s->back_due[d->aside_node_id])
+                        continue;
+                if (m->n_left == m->cap_left) {
+                        size_t cap = m->cap_left ? m->cap_left * 2 : 8;
+                        lss_device *l = realloc(m->left, cap * sizeof(*l));
+                        if (!l)
+                                return; /* out of memory: the journal of the pass named them */
+                        m->left = l;
+                        m->cap_left = cap;
+                }
+                m->left[m->n_left++] = *d;
+        }
+}
+
+/* A request of another master (lss_master.h, "another LSS master"). */
+static void on_foreign(lss_master *m, const lss_frame *f) {
+        char frame[32];
+
+        m->stats.foreign_requests++;
+        if (!m->running)
+                return;
+        lss_frame_format(f, frame, sizeof(frame));
+        if (bitrate_on_foreign(m, frame))
+                return; /* past the activation: it ends after its window */
+        master_fail(m, LSS_E_FOREIGN_MASTER, "another LSS master is active (%s)", frame);
+        if (m->as.configuring) {
+                /* its Configure Node-ID went out: the slave may hold that node-ID */
+                m->result.may_hold = true;
+                m->result.id = m->as.id;
+        }
+        aa_on_foreign(m);
+        keep_left_aside(m);
+        m->sc.restore = false;
+        /* nothing more of this operation goes out; a procedure leaves nobody
+         * in configuration, where the other master's Configure would reach it */
+        m->txq_len = 0;
+        if (m->procedure)
+                queue_switch_waiting(m);
+        finish(m);
+}
+
+const lss_device *lss_master_left_aside(const lss_master *m, size_t *n) {
+        *n = m->n_left;
+        return m->left;
+}
+
 /* ---- driving ---- */
 
 void lss_master_on_frame(lss_master *m, const lss_frame *f, uint64_t rx_us) {
         if (rx_us > m->now)
                 m->now = rx_us;
+        if (lss_is_foreign_request(f)) {
+                on_foreign(m, f);
+                return;
+        }
         if (!m->running) {
                 m->stats.ignored_frames++;
                 step_on_stray(m, f);

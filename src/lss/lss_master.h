@@ -40,6 +40,7 @@ enum lss_status {
         LSS_E_INVALID,       /* a bad argument */
         LSS_E_VERIFY,        /* the assignment was not confirmed by a boot-up */
         LSS_E_INCOMPLETE,    /* a scan could not finish cleanly (see message) */
+        LSS_E_FOREIGN_MASTER, /* another LSS master's request was heard: the operation ended at once */
 };
 
 const char *lss_status_name(enum lss_status s);
@@ -181,6 +182,7 @@ typedef struct lss_master_stats {
         uint32_t timeout_us;                     /* the no-answer wait in force now */
         uint32_t patient_wait_us;                /* AutoAssign looked again for mapped devices it had
                                                     not found, with this wait (0: no second look) */
+        uint64_t foreign_requests;               /* LSS requests of another master heard (lss_master_on_frame) */
 } lss_master_stats;
 
 /* Progress callback (0..1) for the long operations; optional. */
@@ -435,7 +437,43 @@ bool lss_master_bitrate_committed(const lss_master *m);
  * bound of the devices that took it). */
 unsigned lss_master_bitrate_answers(const lss_master *m);
 
+/* ---- another LSS master ---- */
+/* LSS answers carry no request identifier: with a second master on the bus
+ * (a PLC's CiA 302 boot-up, a commissioning tool) each takes the other's
+ * answers for its own, and its Configure Node-ID reaches the slaves this
+ * engine selected. So a request of another master fed to
+ * lss_master_on_frame() (lss_is_foreign_request(): only frames we did not
+ * send are fed) ends the running operation at once, LSS_E_FOREIGN_MASTER:
+ * nothing more goes out (frames not yet handed out are dropped) but, for a
+ * procedure, one switch to waiting, so that no slave it selected stays in
+ * configuration where the other master's Configure Node-ID would reach it.
+ * No Configure Node-ID, Configure Bit Timing, Activate or Store follows:
+ * slaves set aside keep their temporary node-ID (lss_master_left_aside()),
+ * a slave whose assignment had sent Configure Node-ID may hold it
+ * (result.may_hold; AutoAssign: a failed outcome with kept_node_id), a
+ * bit-rate change before its activation leaves the devices that accepted
+ * Configure Bit Timing with that rate pending (not configured back). The one
+ * exception: a bit-rate change in its committed window
+ * (lss_master_bitrate_committed()) is past the point of no return: the
+ * devices switch after the delay whatever the master does, and cut off then
+ * the bus stays split. It keeps to the window (silence, the host retune)
+ * and then ends with LSS_E_FOREIGN_MASTER: a switch to waiting at the new
+ * rate, no verification, no Store. */
+/* Slaves the operation that ended with LSS_E_FOREIGN_MASTER left with the
+ * volatile node-ID an enumeration set them aside with (aside_node_id; their
+ * give-back is at the enumeration's end, which it did not reach). Until the
+ * next start. */
+const lss_device *lss_master_left_aside(const lss_master *m, size_t *n);
+/* Gives those back (a procedure): each, by selective switch, Configure
+ * Node-ID 255 and NMT Reset Communication on its temporary node-ID, is
+ * verified by selective switch and Inquire Node-ID as at an enumeration's
+ * end. result.devices: those verified back (node_id as inquired); one that
+ * kept its temporary node-ID makes it LSS_E_INCOMPLETE. `d` is copied. */
+int lss_master_give_back(lss_master *m, const lss_device *d, size_t n, uint64_t now);
+
 /* ---- driving ---- */
+/* A frame received (not our own echo: lss_master_on_tx_confirmed()). An LSS
+ * request among them is another master's (above). */
 void lss_master_on_frame(lss_master *m, const lss_frame *f, uint64_t rx_us);
 void lss_master_on_time(lss_master *m, uint64_t now);
 /* The frames handed out were written; `now` is the time taken just before

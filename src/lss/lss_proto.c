@@ -117,6 +117,10 @@ bool lss_is_request(const lss_frame *f) {
         return plain_frame(f) && f->id == LSS_COB_MASTER && f->len == 8;
 }
 
+bool lss_is_foreign_request(const lss_frame *f) {
+        return plain_frame(f) && f->id == LSS_COB_MASTER;
+}
+
 bool bootup_decode(const lss_frame *f, uint8_t *node_id, uint8_t *nmt_state) {
         if (!plain_frame(f) || f->len != 1)
                 return false;

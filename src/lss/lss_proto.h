@@ -114,6 +114,11 @@ void bootup_encode(lss_frame *f, uint8_t node_id);
 bool lss_is_response(const lss_frame *f);
 /* A valid LSS request: standard ID 0x7E5, DLC 8, no flags. */
 bool lss_is_request(const lss_frame *f);
+/* An LSS request of another master: a standard data frame at 0x7E5 (any
+ * DLC) that is not our own echo (LSS_FRAME_ECHO). Whoever drives the
+ * engine hands it only frames it did not send, so any such frame is
+ * somebody else's: a second LSS master on the bus. */
+bool lss_is_foreign_request(const lss_frame *f);
 /* Boot-up (or heartbeat) frame of a node: 0x701..0x77F, DLC 1, standard, not RTR. */
 bool bootup_decode(const lss_frame *f, uint8_t *node_id, uint8_t *nmt_state);
 /* NMT command frame: id 0, DLC 2. */

@@ -52,6 +52,9 @@
 #define LSSD_ERROR_PERMISSION_DENIED LSSD_ERROR_PREFIX "PermissionDenied"
 /* a raw service by a caller that does not hold the bus (Acquire()) */
 #define LSSD_ERROR_NOT_HELD        LSSD_ERROR_PREFIX "NotHeld"
+/* another LSS master's request was heard: the job ended at once, or the bus
+ * takes none until it heard none for foreign_master_quiet_s (lssd.conf) */
+#define LSSD_ERROR_FOREIGN_MASTER  LSSD_ERROR_PREFIX "ForeignMaster"
 
 /* ReloadConfig() with a bad file (the standard D-Bus name, as dbus-daemon uses it). */
 #define LSSD_ERROR_INVALID_FILE_CONTENT "org.freedesktop.DBus.Error.InvalidFileContent"
@@ -73,4 +76,6 @@
         X(LIMITS_EXCEEDED, ENOBUFS, 14, "too much at once: the job queue is full") \
         X(PERMISSION_DENIED, EPERM, 16, \
           "lssd itself is not permitted to do this (e.g. retune the CAN interface without CAP_NET_ADMIN)") \
-        X(NOT_HELD, ENOLCK, 18, "the bus is not held: raw services need Acquire() first")
+        X(NOT_HELD, ENOLCK, 18, "the bus is not held: raw services need Acquire() first") \
+        X(FOREIGN_MASTER, ENOTUNIQ, 19, \
+          "another LSS master is active on the bus: lssd stopped and takes no LSS job until it is quiet")

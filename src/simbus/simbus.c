@@ -14,6 +14,9 @@
 struct simbus {
         membus *bus;
         uint64_t t0; /* CLOCK_MONOTONIC µs at virtual time 0 */
+        uint64_t requests;       /* LSS requests the master wrote */
+        simbus_foreign foreign;  /* another master, once `requests` reaches its `after` */
+        bool foreign_armed;
 };
 
 static uint64_t monotonic_us(void) {
@@ -27,12 +30,41 @@ static void catch_up(simbus *s) {
                 membus_advance(s->bus, now - s->t0);
 }
 
+/* The other master starts: its requests, `period_ms` apart from now. */
+static void foreign_start(simbus *s) {
+        lss_frame f = { .id = LSS_COB_MASTER, .len = 8,
+                        .data = { LSS_CS_INQUIRE_VENDOR, 0xF0, 0xF0, 0xF0, 0xF0, 0xF0, 0xF0, 0xF0 } };
+        for (unsigned k = 0; k < s->foreign.count; k++)
+                membus_inject(s->bus, &f, membus_now(s->bus) + (uint64_t) k * s->foreign.period_ms * 1000u);
+        s->foreign_armed = false;
+}
+
 static int sim_send(void *impl, const lss_frame *f) {
         simbus *s = impl;
         catch_up(s);
         membus_master_send(s->bus, f);
+        if (!lss_is_request(f))
+                return 0;
+        s->requests++;
+        if (s->foreign_armed && (s->foreign.after_cs ? f->data[0] == s->foreign.after_cs :
+                                                            s->requests >= s->foreign.after))
+                foreign_start(s);
         return 0;
 }
+
+void simbus_add_foreign(simbus *s, const simbus_foreign *f) {
+        catch_up(s);
+        s->foreign = *f;
+        s->foreign_armed = f->count > 0;
+        if (s->foreign_armed && !f->after_cs && f->after <= s->requests)
+                foreign_start(s);
+}
+
+struct membus *simbus_bus(simbus *s) {
+        catch_up(s);
+        return s->bus;
+}
+
 
 static int sim_recv(void *impl, lss_frame *f, uint64_t *rx_us) {
         simbus *s = impl;
@@ -166,6 +198,51 @@ static int parse_u32(const char *s, uint32_t *ret) {
         return 0;
 }
 
+/* spec's ':'-separated fields into buf (of `size`): their count, or -1 when
+ * spec is too long, has more than `max` fields or an interface name too
+ * long for one (the first field). */
+static int split_spec(const char *spec, char *buf, size_t size, char **fields, size_t max) {
+        size_t n = 0;
+        if (!spec || strlen(spec) >= size)
+                return -1;
+        strcpy(buf, spec);
+        for (char *p = buf, *save = NULL, *t; n <= max && (t = strtok_r(p, ":", &save)); p = NULL)
+                if (n < max)
+                        fields[n++] = t;
+                else
+                        return -1;
+        return n > 0 && strlen(fields[0]) <= 15 ? (int) n : -1;
+}
+
+static int parse_in(const char *s, uint32_t lo, uint32_t hi, unsigned *ret) {
+        uint32_t v;
+        if (parse_u32(s, &v) < 0 || v < lo || v > hi)
+                return -EINVAL;
+        *ret = v;
+        return 0;
+}
+
+int simbus_foreign_parse(const char *spec, simbus_foreign *ret) {
+        char buf[64], *fields[4];
+        int n = split_spec(spec, buf, sizeof(buf), fields, 4);
+        if (n < 2)
+                return -EINVAL;
+        simbus_foreign f = { .count = 1, .period_ms = 100 };
+        unsigned cs;
+        if (fields[1][0] == '@') {
+                if (parse_in(fields[1] + 1, 1, 255, &cs) < 0)
+                        return -EINVAL;
+                f.after_cs = (int) cs;
+        } else if (parse_in(fields[1], 0, 1000000, &f.after) < 0)
+                return -EINVAL;
+        if ((n > 2 && parse_in(fields[2], 1, 100000, &f.count) < 0) ||
+            (n > 3 && parse_in(fields[3], 1, 60000, &f.period_ms) < 0))
+                return -EINVAL;
+        strcpy(f.ifname, fields[0]);
+        *ret = f;
+        return 0;
+}
+
 static const char *const profile_names[] = {
         [SIMBUS_CANOPENNODE] = "canopennode",
         [SIMBUS_CANOPENNODE_BITRATE] = "canopennode-bitrate",
@@ -184,15 +261,9 @@ static int parse_profile(const char *name, simbus_profile *ret) {
 
 int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint8_t *node_id,
                        simbus_profile *profile) {
-        char buf[128], *fields[8];
-        size_t n = 0;
-
-        if (!spec || strlen(spec) >= sizeof(buf))
-                return -EINVAL;
-        strcpy(buf, spec);
-        for (char *p = buf, *save = NULL, *t; n < 8 && (t = strtok_r(p, ":", &save)); p = NULL)
-                fields[n++] = t;
-        if (n < 5 || n > 7 || strlen(fields[0]) > 15)
+        char buf[128], *fields[7];
+        int n = split_spec(spec, buf, sizeof(buf), fields, 7);
+        if (n < 5)
                 return -EINVAL;
         *profile = SIMBUS_PLAIN;
         if (n == 7 && parse_profile(fields[6], profile) < 0)
@@ -201,7 +272,7 @@ int simbus_slave_parse(const char *spec, char ifname[16], lss_identity *id, uint
                 n = 6;
 
         uint32_t v[5] = { 0, 0, 0, 0, LSS_NODE_ID_UNCONFIGURED };
-        for (size_t i = 1; i < n; i++)
+        for (int i = 1; i < n; i++)
                 if (parse_u32(fields[i], &v[i - 1]) < 0)
                         return -EINVAL;
         if (v[4] != LSS_NODE_ID_UNCONFIGURED && !lss_node_id_valid(v[4]))

@@ -34,6 +34,26 @@ void simbus_profile_faults(simbus_profile profile, lss_slave_faults *f);
 
 /* node_id 1..127 or 0xFF. */
 int simbus_add_slave(simbus *s, const lss_identity *id, uint8_t node_id, simbus_profile profile);
+/* Another LSS master on a simulated bus (lssd --sim-foreign-master): once
+ * the bus's master (lssd) wrote `after` LSS requests (0: at once), or its
+ * first request with cs `after_cs` (nonzero), the other master sends `count`
+ * requests, `period_ms` apart: Inquire Vendor-ID with
+ * its reserved bytes 0xF0 (SIMBUS_FOREIGN_FRAME), which tells it from
+ * lssd's own in LSSD_SIM_TRACE's lines; slaves in configuration answer it. */
+#define SIMBUS_FOREIGN_FRAME "7E5#5AF0F0F0F0F0F0F0"
+typedef struct simbus_foreign {
+        char ifname[16];
+        unsigned after, count, period_ms;
+        int after_cs;
+} simbus_foreign;
+/* Parses "IFACE:AFTER[:COUNT[:PERIOD_MS]]", AFTER a number of requests or
+ * @CS, a command specifier (COUNT 1..100000, default 1; PERIOD_MS 1..60000,
+ * default 100). -EINVAL if malformed. */
+int simbus_foreign_parse(const char *spec, simbus_foreign *ret);
+void simbus_add_foreign(simbus *s, const simbus_foreign *f);
+/* The in-memory bus behind it, caught up to now (tests look at the slaves). */
+struct membus *simbus_bus(simbus *s);
+
 /* The simulated bus as a transport; the transport's close() frees it. */
 void simbus_transport(simbus *s, lss_transport *ret);
 

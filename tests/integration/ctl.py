@@ -33,7 +33,8 @@ LSSCTL = os.environ.get('LSSCTL_BINARY', 'lssctl')
 EXIT = {
     'ok': 0, 'failure': 1, 'usage': 2, 'not-running': 3, 'access-denied': 4, 'no-response': 5, 'rejected': 6,
     'busy': 7, 'bus-down': 8, 'bus-off': 9, 'not-found': 10, 'conflict': 11, 'cancelled': 12,
-    'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'permission-denied': 16, 'partial': 17, 'not-held': 18, 'interrupted': 130,
+    'not-supported': 13, 'limits-exceeded': 14, 'bad-config': 15, 'permission-denied': 16, 'partial': 17, 'not-held': 18,
+    'foreign-master': 19, 'interrupted': 130,
 }
 
 # the bus and map of the D-Bus tests (run.py), so both check the same devices
@@ -42,7 +43,7 @@ from run import CONFIG, SLAVES, VCAN1  # noqa: E402
 JSON_DEVICE_KEYS = ['bus', 'vendor', 'product', 'revision', 'serial', 'revision_known', 'node_id', 'mapped_node_id',
                     'state', 'last_seen', 'path']
 JSON_BUS_KEYS = ['interface', 'state', 'bitrate', 'job', 'progress', 'queue_length', 'devices', 'device_states',
-                 'last_pass']
+                 'last_pass', 'foreign_master']
 
 
 def expect(cond, what):
@@ -177,6 +178,7 @@ def test_status():
         expect_eq(sorted(b), sorted(JSON_BUS_KEYS), 'bus keys')
         expect_eq((b['interface'], b['state'], b['bitrate'], b['job'], b['queue_length']),
                   ('vcan0', 'idle', 125000, '', 0), 'bus')
+        expect_eq(b['foreign_master'], None, 'no other LSS master heard')
         scan_all(env)
         b = ctl.ok('--json', 'status').json['buses'][0]  # options before the command work too
         expect_eq(b['devices'], 4, 'device count')

@@ -360,6 +360,8 @@ def default_value(sig):
         return [('InquireNodeId', ('b', True))]
     if sig == '(ttssa{su})':
         return (1, 1, 'boot', 'done', {})
+    if sig == '(btts)':
+        return (False, 0, 0, '')
     raise ValueError('no default for ' + sig)
 
 

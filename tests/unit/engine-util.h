@@ -64,6 +64,24 @@ static inline const lss_result *run(lss_master *m, membus *b) {
         return lss_drive(m, b, 600 * SECOND, NULL, NULL);
 }
 
+/* Every frame on the wire, in order: membus_set_trace(b, wire_trace_cb, tr),
+ * tr from calloc (it is large). */
+#define WIRE_TRACE_MAX 20000
+typedef struct wire_trace {
+        lss_frame f[WIRE_TRACE_MAX];
+        uint64_t t[WIRE_TRACE_MAX];
+        size_t n;
+} wire_trace;
+
+static inline void wire_trace_cb(void *ud, const lss_frame *f, uint64_t t_us) {
+        wire_trace *tr = ud;
+        if (tr->n < WIRE_TRACE_MAX) {
+                tr->f[tr->n] = *f;
+                tr->t[tr->n] = t_us;
+                tr->n++;
+        }
+}
+
 static inline bool all_waiting(membus *b) {
         for (size_t i = 0; i < membus_slave_count(b); i++)
                 if (membus_slave(b, i)->st.configuration)

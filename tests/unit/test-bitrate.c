@@ -9,23 +9,6 @@
 
 #include "engine-util.h"
 
-#define MAX_TRACE 4096
-
-typedef struct trace {
-        lss_frame f[MAX_TRACE];
-        uint64_t t[MAX_TRACE];
-        size_t n;
-} trace;
-
-static void on_trace(void *ud, const lss_frame *f, uint64_t t_us) {
-        trace *tr = ud;
-        if (tr->n < MAX_TRACE) {
-                tr->f[tr->n] = *f;
-                tr->t[tr->n] = t_us;
-                tr->n++;
-        }
-}
-
 /* What the test's "host" does when the engine asks for the retune. */
 typedef struct host {
         enum lss_retune answer;   /* LSS_RETUNE_NONE: never answers */
@@ -76,7 +59,7 @@ static lss_bitrate_params params(uint32_t from, uint32_t to, lss_bitrate_device 
                                       .n_devices = n };
 }
 
-static size_t count_cs(const trace *tr, uint32_t id, uint8_t cs) {
+static size_t count_cs(const wire_trace *tr, uint32_t id, uint8_t cs) {
         size_t n = 0;
         for (size_t i = 0; i < tr->n; i++)
                 n += tr->f[i].id == id && tr->f[i].data[0] == cs;
@@ -170,14 +153,14 @@ START_TEST(seed_example_bytes) {
         lss_bitrate_device dev;
         membus *b = bus_with(1, 125000, NULL, &dev);
         lss_master *m = master_default();
-        trace *tr = calloc(1, sizeof(*tr));
+        wire_trace *tr = calloc(1, sizeof(*tr));
         host h = { .answer = LSS_RETUNE_DONE, .retune_bus = true };
         lss_bitrate_params p = params(125000, 500000, &dev, 1);
         size_t i, act = 0;
         bool seen_configure = false;
 
         ck_assert_ptr_nonnull(tr);
-        membus_set_trace(b, on_trace, tr);
+        membus_set_trace(b, wire_trace_cb, tr);
         ck_assert_int_eq(lss_master_set_bitrate(m, &p, membus_now(b)), 0);
         ck_assert_int_eq(drive(m, b, &h)->status, LSS_OK);
 
@@ -219,7 +202,7 @@ START_TEST(refusal_activates_nothing) {
         lss_slave_faults f;
         membus *b = bus_with(3, 125000, NULL, devs);
         lss_master *m = master_default();
-        trace *tr = calloc(1, sizeof(*tr));
+        wire_trace *tr = calloc(1, sizeof(*tr));
         host h = { .answer = LSS_RETUNE_DONE, .retune_bus = true };
         lss_bitrate_params p = params(125000, 100000, devs, 3);
 
@@ -227,7 +210,7 @@ START_TEST(refusal_activates_nothing) {
         lss_slave_faults_default(&f);
         f.bit_index_unsupported = 1u << 5; /* the transmitter profile */
         membus_slave(b, 2)->faults = f;
-        membus_set_trace(b, on_trace, tr);
+        membus_set_trace(b, wire_trace_cb, tr);
 
         ck_assert_int_eq(lss_bit_timing_index(100000), 5);
         ck_assert_int_eq(lss_master_set_bitrate(m, &p, membus_now(b)), 0);
@@ -328,13 +311,13 @@ START_TEST(unreachable_changes_nothing) {
         lss_bitrate_device devs[3];
         membus *b = bus_with(2, 125000, NULL, devs);
         lss_master *m = master_default();
-        trace *tr = calloc(1, sizeof(*tr));
+        wire_trace *tr = calloc(1, sizeof(*tr));
         host h = { .answer = LSS_RETUNE_DONE, .retune_bus = true };
 
         ck_assert_ptr_nonnull(tr);
         devs[2] = (lss_bitrate_device) { .id = { 0x9A, 3, 0x77, 0x4242 } }; /* not on the bus */
         lss_bitrate_params p = params(125000, 250000, devs, 3);
-        membus_set_trace(b, on_trace, tr);
+        membus_set_trace(b, wire_trace_cb, tr);
         ck_assert_int_eq(lss_master_set_bitrate(m, &p, membus_now(b)), 0);
         const lss_result *r = drive(m, b, &h);
         ck_assert_int_eq(r->status, LSS_E_NOT_FOUND);
@@ -461,7 +444,7 @@ END_TEST
  * activation does not make it look switched: Inquire Node-ID must answer too. */
 typedef struct stray {
         host h;
-        trace *tr;
+        wire_trace *tr;
         size_t seen;
         uint32_t serial;
         unsigned injected;
@@ -495,7 +478,7 @@ START_TEST(stray_answer_does_not_verify) {
         lss_slave_faults_default(&f);
         f.miss_activation = true;
         membus_slave(b, 1)->faults = f;
-        membus_set_trace(b, on_trace, st.tr);
+        membus_set_trace(b, wire_trace_cb, st.tr);
         ck_assert_int_eq(lss_master_set_bitrate(m, &p, membus_now(b)), 0);
         const lss_result *r = lss_drive(m, b, 60 * SECOND, inject_44, &st);
         ck_assert_uint_gt(st.injected, 0);
@@ -514,7 +497,7 @@ END_TEST
  * switch to waiting when several slaves are still in configuration). */
 typedef struct burst {
         host h;
-        trace *tr;
+        wire_trace *tr;
         size_t n_devices, frames;
         bool done;
 } burst;
@@ -544,7 +527,7 @@ START_TEST(late_activation_on_the_wire) {
 
         bu.tr = calloc(1, sizeof(*bu.tr));
         ck_assert_ptr_nonnull(bu.tr);
-        membus_set_trace(b, on_trace, bu.tr);
+        membus_set_trace(b, wire_trace_cb, bu.tr);
         ck_assert_int_eq(lss_master_set_bitrate(m, &p, membus_now(b)), 0);
         const lss_result *r = lss_drive(m, b, 60 * SECOND, inject_burst, &bu);
         ck_assert(bu.done);

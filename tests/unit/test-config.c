@@ -117,6 +117,7 @@ START_TEST(example_conf_loads_cleanly) {
         ck_assert_uint_eq(c->lss_timeout_ms, 20);
         ck_assert_int_eq(c->lss_timing, LSSCONF_LSS_TIMING_ADAPTIVE);
         ck_assert_uint_eq(c->boot_ready_limit_s, 1800); /* commented out: the default */
+        ck_assert_uint_eq(c->foreign_master_quiet_s, 3);
         ck_assert_uint_eq(c->n_buses, 2);
         const lssconf_bus *b = lssconf_find_bus(c, "can0");
         ck_assert_ptr_eq(b, &c->buses[0]);
@@ -127,6 +128,7 @@ START_TEST(example_conf_loads_cleanly) {
         ck_assert_uint_eq(b->pool_lo, 100);
         ck_assert_uint_eq(b->pool_hi, 110);
         ck_assert_uint_eq(b->lss_timeout_ms, 20);
+        ck_assert_uint_eq(b->foreign_master_quiet_s, 3);
         ck_assert_uint_eq(b->n_devices, 4);
         ck_assert_uint_eq(b->devices[1].identity.serial, 0x80002468u);
         ck_assert(b->devices[1].has_revision);
@@ -157,6 +159,7 @@ START_TEST(all_keys) {
         ck_assert_uint_eq(c->lss_timeout_ms, 35);
         ck_assert_int_eq(c->lss_timing, LSSCONF_LSS_TIMING_FIXED);
         ck_assert_uint_eq(c->boot_ready_limit_s, 600);
+        ck_assert_uint_eq(c->foreign_master_quiet_s, 10);
         ck_assert_uint_eq(c->n_buses, 2);
 
         const lssconf_bus *b = &c->buses[0];
@@ -172,6 +175,7 @@ START_TEST(all_keys) {
         ck_assert(b->replace);
         ck_assert_uint_eq(b->lss_timeout_ms, 50);
         ck_assert_int_eq(b->lss_timing, LSSCONF_LSS_TIMING_ADAPTIVE);
+        ck_assert_uint_eq(b->foreign_master_quiet_s, 7);
         ck_assert(b->has_vendor && b->has_product);
         ck_assert_uint_eq(b->vendor, 0xEC);
         ck_assert_uint_eq(b->product, 0x1234);
@@ -199,6 +203,7 @@ START_TEST(all_keys) {
         ck_assert_uint_eq(b->bitrate, 10000);
         ck_assert_uint_eq(b->lss_timeout_ms, 35);
         ck_assert_int_eq(b->lss_timing, LSSCONF_LSS_TIMING_FIXED);
+        ck_assert_uint_eq(b->foreign_master_quiet_s, 10);
         ck_assert_int_eq(b->unknown, LSSCONF_UNKNOWN_POOL);
         ck_assert_uint_eq(b->pool_lo, 1);
         ck_assert_uint_eq(b->pool_hi, 1);
@@ -219,6 +224,7 @@ START_TEST(defaults) {
         ck_assert_int_eq(c->lss_timing, LSSCONF_LSS_TIMING_ADAPTIVE);
         ck_assert_uint_eq(c->boot_ready_limit_s, 1800);
         ck_assert_uint_eq(LSSCONF_BOOT_READY_LIMIT_S_DEFAULT, 1800);
+        ck_assert_uint_eq(c->foreign_master_quiet_s, 3);
         const lssconf_bus *b = &c->buses[0];
         ck_assert_uint_eq(b->bitrate, 125000);
         ck_assert(!b->auto_assign);
@@ -229,6 +235,7 @@ START_TEST(defaults) {
         ck_assert_int_eq(b->unknown, LSSCONF_UNKNOWN_IGNORE);
         ck_assert_uint_eq(b->lss_timeout_ms, 20);
         ck_assert_int_eq(b->lss_timing, LSSCONF_LSS_TIMING_ADAPTIVE);
+        ck_assert_uint_eq(b->foreign_master_quiet_s, 3);
         ck_assert_uint_eq(b->n_devices, 0);
         ck_assert_ptr_null(b->devices);
         lssconf_free(c);
@@ -411,6 +418,9 @@ static const struct {
         { "lss_timeout_ms = -1;", "buses[0].lss_timeout_ms: -1 is out of range 0..10000" },
         { "lss_timeout_ms = 10001;", "buses[0].lss_timeout_ms: 10001 is out of range 0..10000" },
         { "lss_timing = \"slow\";", "buses[0].lss_timing: \"slow\" is not \"adaptive\" or \"fixed\"" },
+        { "foreign_master_quiet_s = \"3\";", "buses[0].foreign_master_quiet_s: expected an integer, got a string" },
+        { "foreign_master_quiet_s = -1;", "buses[0].foreign_master_quiet_s: -1 is out of range 0..3600" },
+        { "foreign_master_quiet_s = 3601;", "buses[0].foreign_master_quiet_s: 3601 is out of range 0..3600" },
         { "lss_timing = true;", "buses[0].lss_timing: expected a string, got a boolean" },
         { "vendor = \"x\";", "buses[0].vendor: expected an integer, got a string" },
         { "product = -5;", "buses[0].product: -5 is out of range 0x0..0xFFFFFFFF" },
@@ -487,6 +497,9 @@ START_TEST(global_key_errors) {
         expect_load_error("boot_ready_limit_s = \"30\";\n", ":1: boot_ready_limit_s: expected an integer, got a string");
         expect_load_error("boot_ready_limit_s = 30.5;\n", ":1: boot_ready_limit_s: expected an integer");
         expect_load_error("lss_timing = 5;\n", ":1: lss_timing: expected a string, got an integer");
+        expect_load_error("\nforeign_master_quiet_s = 0;\n", ":2: foreign_master_quiet_s: 0 is out of range 1..3600");
+        expect_load_error("foreign_master_quiet_s = 3601;\n", ":1: foreign_master_quiet_s: 3601 is out of range 1..3600");
+        expect_load_error("foreign_master_quiet_s = 2.5;\n", ":1: foreign_master_quiet_s: expected an integer");
         expect_load_error("lss_timing = \"Fixed\";\n", ":1: lss_timing: \"Fixed\" is not \"adaptive\" or \"fixed\"");
         expect_load_error("\n\nbuses = 5;\n", ":3: buses: expected a list ( { ... }, ... ), got an integer");
         expect_load_error("buses = { interface = \"can0\"; };\n", ":1: buses: expected a list");
@@ -982,17 +995,29 @@ START_TEST(describe) {
         ck_assert_int_eq(load("lss_timing = \"fixed\";\n"
                               "buses = ( { interface = \"can0\"; bitrate = 250000; auto_assign = true; unknown = \"pool\";\n"
                               "pool = [ 100, 110 ]; nmt_stop = true; replace = true; reset_after_pass = true;\n"
-                              "bitrate_change = true; lss_timeout_ms = 30;\n"
+                              "bitrate_change = true; lss_timeout_ms = 30; foreign_master_quiet_s = 7;\n"
                               "vendor = 1; product = 2; devices = ( { serial = 10; node_id = 5; } ); },\n"
                               "{ interface = \"can1\"; store = false; devices = ( { vendor = 1; product = 2; serial = 10; node_id = 5; },\n"
                               "{ vendor = 1; product = 2; serial = 11; node_id = 6; } ); } );\n", &c, &d), 0);
         ck_assert_str_eq(lssconf_bus_describe(&c->buses[0], buf, sizeof(buf)),
                          "can0: 250000 bit/s, 1 mapped device, auto-assign on, store on, unknown devices: pool 100..110, "
-                         "nmt-stop on, replace on, reset after pass on, bit-rate change allowed, LSS timeout 30 ms (fixed)");
+                         "nmt-stop on, replace on, reset after pass on, bit-rate change allowed, LSS timeout 30 ms (fixed), "
+                         "quiet after another master 7 s");
         ck_assert_str_eq(lssconf_bus_describe(&c->buses[1], buf, sizeof(buf)),
                          "can1: 125000 bit/s, 2 mapped devices, auto-assign off, store off, unknown devices: ignore, "
                          "nmt-stop off, replace off, reset after pass off, bit-rate change off, LSS timeout 20 ms "
-                         "(fixed)");
+                         "(fixed), quiet after another master 3 s");
+        /* the longest a bus can say is not cut */
+        lssconf_device many[127] = { { .source = 1 } };
+        for (size_t i = 0; i < 127; i++)
+                many[i].source = 1;
+        lssconf_bus longest = { .interface = "can-0123456789a", .bitrate = 1000000, .lss_timeout_ms = 10000,
+                                .lss_timing = LSSCONF_LSS_TIMING_ADAPTIVE, .foreign_master_quiet_s = 3600,
+                                .auto_assign = true, .unknown = LSSCONF_UNKNOWN_POOL, .pool_lo = 100, .pool_hi = 127,
+                                .bitrate_change = true, .devices = many, .n_devices = 127 };
+        lssconf_bus_describe(&longest, buf, sizeof(buf));
+        ck_assert_msg(strlen(buf) + 1 < sizeof(buf), "cut: %s", buf);
+        ck_assert(strstr(buf, "quiet after another master 3600 s"));
         /* truncation is safe */
         char small[8];
         ck_assert_str_eq(lssconf_bus_describe(&c->buses[0], small, sizeof(small)), "can0: 2");
@@ -1184,7 +1209,7 @@ START_TEST(dcf_map_from_files) {
         ck_assert_str_eq(lssconf_bus_describe(b, buf, sizeof(buf)),
                          "can0: 250000 bit/s, 3 mapped devices (1 from DCFs), auto-assign off, store on, unknown "
                          "devices: ignore, nmt-stop off, replace off, reset after pass off, bit-rate change off, LSS "
-                         "timeout 20 ms (adaptive)");
+                         "timeout 20 ms (adaptive), quiet after another master 3 s");
         lssconf_free(c);
         lssconf_diag_clear(&d);
 

@@ -12,7 +12,7 @@ static const char *const contract_names[] = {
         "org.lssd.LSS1.Error.BusDown",    "org.lssd.LSS1.Error.BusOff",   "org.lssd.LSS1.Error.NotFound",
         "org.lssd.LSS1.Error.Conflict",   "org.lssd.LSS1.Error.Cancelled", "org.lssd.LSS1.Error.NotSupported",
         "org.lssd.LSS1.Error.LimitsExceeded", "org.lssd.LSS1.Error.PermissionDenied",
-        "org.lssd.LSS1.Error.NotHeld",
+        "org.lssd.LSS1.Error.NotHeld", "org.lssd.LSS1.Error.ForeignMaster",
 };
 
 /* Every name of the v1 contract is in the map, once, with its own errno. */
@@ -52,7 +52,7 @@ END_TEST
 START_TEST(status_names) {
         ck_assert_ptr_null(lssd_status_to_error_name(LSS_OK));
         ck_assert_str_eq(lssd_status_to_result(LSS_OK), "done");
-        for (int s = LSS_E_NO_RESPONSE; s <= LSS_E_INCOMPLETE; s++) {
+        for (int s = LSS_E_NO_RESPONSE; s <= LSS_E_FOREIGN_MASTER; s++) {
                 const char *name = lssd_status_to_error_name((enum lss_status) s);
                 ck_assert_ptr_nonnull(name);
                 ck_assert_ptr_nonnull(lssd_status_to_result((enum lss_status) s));
@@ -67,6 +67,8 @@ START_TEST(status_names) {
         ck_assert_str_eq(lssd_status_to_error_name(LSS_E_CANCELLED), LSSD_ERROR_CANCELLED);
         ck_assert_str_eq(lssd_status_to_error_name(LSS_E_INVALID), SD_BUS_ERROR_INVALID_ARGS);
         ck_assert_str_eq(lssd_status_to_result(LSS_E_CANCELLED), "cancelled");
+        ck_assert_str_eq(lssd_status_to_error_name(LSS_E_FOREIGN_MASTER), LSSD_ERROR_FOREIGN_MASTER);
+        ck_assert_str_eq(lssd_status_to_result(LSS_E_FOREIGN_MASTER), "foreign-master");
         /* out of range: still a name, never NULL */
         ck_assert_ptr_nonnull(lssd_status_to_error_name((enum lss_status) 1000));
         ck_assert_ptr_nonnull(lssd_status_to_result((enum lss_status) 1000));

@@ -256,6 +256,36 @@ START_TEST(sim_slave_spec) {
 }
 END_TEST
 
+/* --sim-foreign-master IFACE:AFTER[:COUNT[:PERIOD_MS]] */
+START_TEST(sim_foreign_spec) {
+        simbus_foreign f;
+        ck_assert_int_eq(simbus_foreign_parse("vcan0:150", &f), 0);
+        ck_assert_str_eq(f.ifname, "vcan0");
+        ck_assert_uint_eq(f.after, 150);
+        ck_assert_uint_eq(f.count, 1);
+        ck_assert_uint_eq(f.period_ms, 100);
+        ck_assert_int_eq(simbus_foreign_parse("sim:0:20:0x32", &f), 0);
+        ck_assert_uint_eq(f.after, 0);
+        ck_assert_uint_eq(f.count, 20);
+        ck_assert_uint_eq(f.period_ms, 50);
+        ck_assert_int_eq(f.after_cs, 0);
+        /* at lssd's first Activate Bit Timing */
+        ck_assert_int_eq(simbus_foreign_parse("sim:@0x15", &f), 0);
+        ck_assert_int_eq(f.after_cs, 0x15);
+        ck_assert_int_eq(simbus_foreign_parse("sim:@256", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim:@0", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim:@", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim:1:0", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim:1:1:0", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim:1:1:60001", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim:-1", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("sim:1:2:3:4", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse("0123456789abcdef:1", &f), -EINVAL);
+        ck_assert_int_eq(simbus_foreign_parse(NULL, &f), -EINVAL);
+}
+END_TEST
+
 static Suite *suite(void) {
         Suite *s = suite_create("daemon-queue");
         TCase *tc = tcase_create("core");
@@ -266,6 +296,7 @@ static Suite *suite(void) {
         tcase_add_test(tc, paths);
         tcase_add_test(tc, auth_decision);
         tcase_add_test(tc, sim_slave_spec);
+        tcase_add_test(tc, sim_foreign_spec);
         suite_add_tcase(s, tc);
         return s;
 }

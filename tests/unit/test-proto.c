@@ -83,6 +83,21 @@ START_TEST(response_acceptance) {
         f.len = 8;
         f.id = 0x7E3;
         ck_assert(!lss_is_response(&f));
+        ck_assert(!lss_is_foreign_request(&f));
+        /* a frame at the master's identifier that is not our echo: another
+         * master's, whatever its DLC; our echo, look-alikes and answers are not */
+        lss_encode_inquire(&f, LSS_FIELD_VENDOR);
+        ck_assert(lss_is_foreign_request(&f));
+        f.len = 2;
+        ck_assert(lss_is_foreign_request(&f));
+        f.flags = LSS_FRAME_ECHO;
+        ck_assert(!lss_is_foreign_request(&f));
+        f.flags = LSS_FRAME_EFF;
+        ck_assert(!lss_is_foreign_request(&f));
+        f.flags = LSS_FRAME_RTR;
+        ck_assert(!lss_is_foreign_request(&f));
+        lss_frame_response(&f, LSS_CS_INQUIRE_VENDOR);
+        ck_assert(!lss_is_foreign_request(&f));
         bootup_encode(&f, 0x7F);
         ck_assert(bootup_decode(&f, NULL, NULL));
         f.id = 0x700;

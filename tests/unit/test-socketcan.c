@@ -812,7 +812,7 @@ START_TEST(recv_frames) {
 END_TEST
 
 /* Our own request comes back flagged (MSG_CONFIRM) in its place among the
- * answers; another sender's 0x7E5 is nobody's answer and never comes out. */
+ * answers; another sender's 0x7E5 comes out unflagged: another master. */
 START_TEST(recv_own_echo) {
         socketcan_port *p;
         lss_frame f;
@@ -824,11 +824,17 @@ START_TEST(recv_own_echo) {
         push_rx(CAN_MTU, 0x7E5, 8);                             /* another master's */
         push_rx(CAN_MTU, 0x7E5, 8)->msg_flags = MSG_CONFIRM;    /* ours, on the wire */
         push_rx(CAN_MTU, 0x7E4, 8);
+        /* another master's comes out as it is: the daemon must notice it */
+        ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
+        ck_assert_uint_eq(f.id, 0x7E5);
+        ck_assert_uint_eq(f.flags, 0);
+        ck_assert(lss_is_foreign_request(&f));
         ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
         ck_assert_uint_eq(f.id, 0x7E5);
         ck_assert_uint_eq(f.flags, LSS_FRAME_ECHO);
         ck_assert_uint_eq(f.len, 8);
         ck_assert(!lss_is_response(&f));
+        ck_assert(!lss_is_foreign_request(&f));
         ck_assert_int_eq(socketcan_port_recv(p, &f, &t), 1);
         ck_assert_uint_eq(f.id, 0x7E4);
         ck_assert_uint_eq(f.flags, 0);
