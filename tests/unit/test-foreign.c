@@ -88,6 +88,21 @@ static bool after_found(injector *in, membus *bus, lss_master *m) {
         return in->found->n >= in->arg;
 }
 
+/* An enumeration of 8 slaves with `faults` (NULL: the defaults), the other
+ * master's request once 3 were found: it ends ForeignMaster. */
+static lss_master *enumerate_interrupted(membus **b, wire_trace *tr, found_log *fl, const lss_slave_faults *faults) {
+        *b = bus_random(8, 11, 0, 0, faults);
+        lss_master *m = master_default();
+        injector in = { .tr = tr, .when = after_found, .arg = 3, .found = fl };
+
+        membus_set_trace(*b, wire_trace_cb, tr);
+        found_log_start(fl, m, *b);
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(*b)), 0);
+        const lss_result *r = lss_drive(m, *b, 600 * SECOND, hook, &in);
+        ck_assert_msg(r->status == LSS_E_FOREIGN_MASTER, "%s: %s", lss_status_name(r->status), r->message);
+        return m;
+}
+
 /* A Scan of CiA 305 slaves, which it keeps in configuration state, ends at
  * the request with every slave back in waiting (its switch to waiting goes
  * out behind the kept slaves' answers to the other master's inquiry) and
@@ -95,15 +110,8 @@ static bool after_found(injector *in, membus *bus, lss_master *m) {
 START_TEST(enumeration_keeps_nobody_in_configuration) {
         wire_trace *tr = calloc(1, sizeof(*tr));
         found_log fl;
-        membus *b = bus_random(8, 11, 0, 0, NULL);
-        lss_master *m = master_default();
-        injector in = { .tr = tr, .when = after_found, .arg = 3, .found = &fl };
-
-        membus_set_trace(b, wire_trace_cb, tr);
-        found_log_start(&fl, m, b);
-        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
-        const lss_result *r = lss_drive(m, b, 600 * SECOND, hook, &in);
-        ck_assert_int_eq(r->status, LSS_E_FOREIGN_MASTER);
+        membus *b;
+        lss_master *m = enumerate_interrupted(&b, tr, &fl, NULL);
         expect_quiet_after(tr, false, 10000);
         lss_drive_idle(b, 20000);
         ck_assert(all_waiting(b));
@@ -127,15 +135,9 @@ START_TEST(enumeration_ends_at_once) {
         found_log fl;
         lss_slave_faults co;
         lss_slave_faults_canopennode(&co);
-        membus *b = bus_random(8, 11, 0, 0, &co);
-        lss_master *m = master_default();
-        injector in = { .tr = tr, .when = after_found, .arg = 3, .found = &fl };
-
-        membus_set_trace(b, wire_trace_cb, tr);
-        found_log_start(&fl, m, b);
-        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
-        const lss_result *r = lss_drive(m, b, 600 * SECOND, hook, &in);
-        ck_assert_msg(r->status == LSS_E_FOREIGN_MASTER, "%s: %s", lss_status_name(r->status), r->message);
+        membus *b;
+        lss_master *m = enumerate_interrupted(&b, tr, &fl, &co);
+        const lss_result *r = lss_master_result(m);
         ck_assert_msg(strstr(r->message, "7E5#5AA5A5A5A5A5A5A5"), "the message names the frame: %s", r->message);
         /* at once: the switch to waiting goes out behind it, nothing else */
         expect_quiet_after(tr, false, 2000);

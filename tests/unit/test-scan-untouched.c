@@ -21,6 +21,18 @@ static void count_wire(void *ud, const lss_frame *f, uint64_t t) {
         c->bootups += bootup_decode(f, NULL, NULL);
 }
 
+/* One enumeration of bus b, its wire counted into *c: ok, n devices, all real. */
+static lss_master *enumerate_counted(membus *b, wire_count *c, size_t n, uint64_t seed) {
+        membus_set_trace(b, count_wire, c);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "seed %u: %s", (unsigned) seed, r->message);
+        ck_assert_uint_eq(r->n_devices, n);
+        assert_devices_real(b, r);
+        return m;
+}
+
 static void add_configured(membus *b, size_t n, uint64_t seed, const lss_slave_faults *f) {
         for (size_t i = 0; i < n; i++) {
                 lss_identity id = { 0x9A, 3, (uint32_t) sim_random_next(&seed), (uint32_t) sim_random_next(&seed) };
@@ -41,13 +53,7 @@ START_TEST(scan_sends_nothing_that_changes) {
                 for (size_t i = 0; i < 10; i++)
                         before[i] = membus_slave(b, i)->st;
                 wire_count c = { 0 };
-                membus_set_trace(b, count_wire, &c);
-                lss_master *m = master_default();
-                ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
-                const lss_result *r = run(m, b);
-                ck_assert_msg(r->status == LSS_OK, "seed %u: %s", (unsigned) seed, r->message);
-                ck_assert_uint_eq(r->n_devices, 8);
-                assert_devices_real(b, r);
+                lss_master *m = enumerate_counted(b, &c, 8, seed);
                 lss_drive_idle(b, 100000);
                 ck_assert_msg(c.nmt == 0 && c.configure == 0 && c.bootups == 0,
                               "seed %u: %u NMT, %u Configure Node-ID, %u boot-ups", (unsigned) seed, c.nmt,
@@ -78,13 +84,8 @@ START_TEST(only_canopennode_set_aside) {
                         membus_add_slave(b, &id, LSS_NODE_ID_UNCONFIGURED, &co);
                 }
                 wire_count c = { 0 };
-                membus_set_trace(b, count_wire, &c);
-                lss_master *m = master_default();
-                ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
-                const lss_result *r = run(m, b);
-                ck_assert_msg(r->status == LSS_OK, "seed %u: %s", (unsigned) seed, r->message);
-                ck_assert_uint_eq(r->n_devices, 6);
-                assert_devices_real(b, r);
+                lss_master *m = enumerate_counted(b, &c, 6, seed);
+                const lss_result *r = lss_master_result(m);
                 ck_assert_msg(c.configure_not_255 <= 2, "seed %u: %u Configure Node-ID other than 255",
                               (unsigned) seed, c.configure_not_255);
                 for (size_t i = 0; i < r->n_devices; i++)
