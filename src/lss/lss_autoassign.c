@@ -382,8 +382,8 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
 static int second_look(lss_master *m, lss_aa_state *s) {
         PT_BEGIN(&s->l_pc);
         /* the bus or the host was slower than the configured timeout allowed
-         * for, so well beyond it */
-        m->stats.patient_wait_us = lss_timing_patient_wait(&m->timing, 0);
+         * for, so well beyond it: "missing" is a verdict */
+        m->stats.patient_wait_us = lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US);
         master_patient_begin(m, m->stats.patient_wait_us);
         s->patient = true;
         if (stops(s)) {
