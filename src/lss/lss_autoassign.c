@@ -337,6 +337,7 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
                 s->direct = (lss_enum_direct) { .choose = direct_choose, .done = direct_done, .ud = s };
                 m->sc.direct = s->plan->unknown == LSS_UNKNOWN_POOL && !s->plan->dry_run ? &s->direct : NULL;
                 m->sc.listen = false; /* the second look asks patiently for what the map has */
+                m->sc.patient_end = s->plan->unknown == LSS_UNKNOWN_POOL || s->plan->replace;
                 m->sc.pc = m->sc.vpc = 0;
                 s->given_before = aa_count_given(s);
                 PT_CALL(&s->e_pc, proc_enumerate(m, &m->sc));
@@ -382,8 +383,8 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
 static int second_look(lss_master *m, lss_aa_state *s) {
         PT_BEGIN(&s->l_pc);
         /* the bus or the host was slower than the configured timeout allowed
-         * for, so well beyond it: "missing" is a verdict */
-        m->stats.patient_wait_us = lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US);
+         * for, so well beyond it */
+        m->stats.patient_wait_us = lss_timing_patient_wait(&m->timing, 0);
         master_patient_begin(m, m->stats.patient_wait_us);
         s->patient = true;
         if (stops(s)) {

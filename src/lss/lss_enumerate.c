@@ -697,6 +697,13 @@ out:;
         PT_END(&s->bpc);
 }
 
+/* Answers came late or after their step on this bus (the master's
+ * counts over its life, and the patience they left): its host or the bus
+ * stalls now and then. */
+static bool stalls_seen(const lss_master *m) {
+        return m->stats.late_answers > 0 || m->stats.stray_answers > 0 || m->timing.patience_us > 0;
+}
+
 /* The looks for anybody left after a silent ping: one on a bus where
  * nobody answered yet (an empty bus costs), else cfg.retries more. */
 static unsigned last_look(const lss_master *m, const lss_scan_state *s) {
@@ -755,9 +762,10 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 s->fs.ping_late_us = lss_timing_listen_guard(&m->timing);
                         /* The last look ends the pass when silent: an answer a
                          * stalled host holds back must still reach it (a slave's
-                         * answers queue, so it holds back all of them; no sign of
-                         * the stall need come before). */
-                        if (s->looks >= last_look(m, s))
+                         * answers queue, so it holds back all of them), where
+                         * nothing looks again for what it misses or this bus has
+                         * stalled before. */
+                        if (s->looks >= last_look(m, s) && (s->patient_end || stalls_seen(m)))
                                 s->fs.ping_late_us = lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US);
                         if (finds_of(s) > 0) {
                                 /* vendor, product and revision of the last find: likely those of the next */

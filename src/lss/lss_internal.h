@@ -220,6 +220,8 @@ typedef struct lss_scan_state {
         bool nobody;            /* the pass ended on a silent ping and set nobody aside (nobody got
                                  * 255 back at its end): no slave is non-configured */
         bool listen;            /* a Scan: a ping that would end a pass empty listens as long as patience may grow */
+        bool patient_end;       /* the last look waits as a verdict does: nothing looks again for
+                                 * what it misses (a Scan; AutoAssign's pool and replacements) */
         bool recheck;           /* this round ended on a verdict: the next one runs with patient waits */
         bool patient_round;     /* this round runs with patient waits: a verdict in it is given */
         int xpc;                /* reexamine_kept() */

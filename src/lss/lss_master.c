@@ -677,7 +677,7 @@ static int start_enumerate(lss_master *m, const lss_fastscan_known *known, bool 
         m->sc.direct = NULL;
         m->sc.keep_stopped = keep_stopped;
         m->sc.no_set_aside = false;
-        m->sc.listen = true;
+        m->sc.listen = m->sc.patient_end = true;
         return start_op(m, proc_enumerate_top, true, now);
 }
 

@@ -2,7 +2,6 @@
 /* Auto-assignment from a node-ID map on the in-memory bus. */
 #include "autoassign-util.h"
 #include "lss/lss_autoassign.h"
-#include "lss/lss_timing.h"
 
 typedef struct frame_count {
         unsigned configure, store, sdo;
@@ -85,8 +84,8 @@ START_TEST(late_device_is_not_missing) {
         }
         const lss_outcome *o = outcome_of(m, &map[4].id);
         ck_assert_int_eq(o->kind, LSS_OUTCOME_MISSING);
-        ck_assert_msg(strstr(o->message, "waits of 250 ms"), "%s", o->message);
-        ck_assert_uint_eq(lss_master_get_stats(m)->patient_wait_us, LSS_VERDICT_WAIT_FLOOR_US);
+        ck_assert_msg(strstr(o->message, "waits of 80 ms"), "%s", o->message);
+        ck_assert_uint_eq(lss_master_get_stats(m)->patient_wait_us, 80000);
         ck_assert(all_waiting(b));
         lss_master_free(m);
         membus_free(b);
@@ -457,7 +456,7 @@ static void absent_device_asked(bool first, unsigned first_look) {
         ck_assert_int_eq(outcome_of(m, &here)->kind, LSS_OUTCOME_ASSIGNED);
         const lss_outcome *o = outcome_of(m, &absent);
         ck_assert_int_eq(o->kind, LSS_OUTCOME_MISSING);
-        ck_assert_msg(strstr(o->message, "waits of 250 ms"), "%s", o->message);
+        ck_assert_msg(strstr(o->message, "waits of 80 ms"), "%s", o->message);
         ck_assert_uint_eq(a.n, first_look + 2);
         lss_master_free(m);
         membus_free(b);

@@ -642,7 +642,7 @@ static void time_silent_pings(void *ud, const lss_frame *f, uint64_t t) {
  * first ping waits the timeout (slow slaves answer it), the looks again are
  * for a slave that lost it and wait as answered steps do (before, each
  * waited the timeout and its late guard, 25 ms); the last one, whose
- * silence ends the pass, waits as long as a verdict does (a host that
+ * silence ends a Scan, waits as long as a verdict does (a host that
  * stalls holds a slave's answers back 100-200 ms, with no sign before:
  * test-stalls.c). */
 START_TEST(last_looks_wait_as_answered_steps) {
