@@ -271,6 +271,8 @@ typedef struct lss_bitrate_state {
         enum lss_retune retune;
         unsigned answers;       /* global: most answers to one Configure Bit Timing */
         bool configuring;       /* a Configure Bit Timing to the new rate is out, not answered yet */
+        size_t unsure;          /* 1 + the device whose Configure Bit Timing had no clear answer (0: none):
+                                 * it may have taken the rate, and is configured back too */
         bool foreign;           /* another master was heard in the committed window */
         char foreign_frame[32]; /* ... its request */
 } lss_bitrate_state;

@@ -16,6 +16,7 @@
 #include <check.h>
 #include <stdio.h>
 
+#include "as-found.h"
 #include "autoassign-util.h"
 
 #define SEEDS 1000u
@@ -74,18 +75,10 @@ static void no_false_verdict(const member *mb, size_t n, uint64_t seed, const ls
         (void) n;
 }
 
-/* Every slave back in waiting, with the node-ID it had (`moved`: but this one). */
-static void as_found(membus *b, const member *mb, size_t n, uint64_t seed, const lss_identity *moved, uint8_t to) {
-        lss_drive_idle(b, 1000000);
-        for (size_t i = 0; i < n; i++) {
-                const lss_slave *s = membus_find(b, &mb[i].id);
-                uint8_t want = moved && lss_identity_equal(moved, &mb[i].id) ? to : mb[i].node_id;
-                ck_assert_msg(!s->st.configuration, "seed %u: %x left in configuration", (unsigned) seed,
-                              mb[i].id.serial);
-                ck_assert_msg(s->st.active_node_id == want && s->st.pending_node_id == want,
-                              "seed %u: %x has node-ID %u (pending %u), had %u", (unsigned) seed, mb[i].id.serial,
-                              s->st.active_node_id, s->st.pending_node_id, want);
-        }
+/* "seed N (M ms stalls)", for the checks' messages */
+static const char *seed_name(char *buf, size_t size, uint64_t seed) {
+        snprintf(buf, size, "seed %u (%u ms stalls)", (unsigned) seed, stall_us[seed % 4] / 1000);
+        return buf;
 }
 
 static void scan_of(const member *mb, size_t n) {
@@ -94,6 +87,9 @@ static void scan_of(const member *mb, size_t n) {
                 unconfigured += mb[i].node_id == 0xFF;
         for (uint64_t seed = 1; seed <= SEEDS; seed++) {
                 membus *b = stalled_bus(mb, n, seed);
+                bus_before bb;
+                char name[48];
+                before_take(&bb, b);
                 lss_master *m = master_default();
                 ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
                 const lss_result *r = run(m, b);
@@ -104,7 +100,7 @@ static void scan_of(const member *mb, size_t n) {
                 for (size_t i = 0; i < r->n_devices; i++)
                         ck_assert_msg(member_of(mb, n, &r->devices[i].id), "seed %u: made-up %x found",
                                       (unsigned) seed, r->devices[i].id.serial);
-                as_found(b, mb, n, seed, NULL, 0);
+                as_found(b, &bb, seed_name(name, sizeof(name), seed));
                 lss_master_free(m);
                 membus_free(b);
         }
@@ -128,6 +124,9 @@ START_TEST(autoassign_of_the_issue_network) {
         const lss_autoassign_plan plan = { .map = map, .n_map = 1, .unknown = LSS_UNKNOWN_IGNORE };
         for (uint64_t seed = 1; seed <= SEEDS; seed++) {
                 membus *b = stalled_bus(issue_network, n, seed);
+                bus_before bb;
+                char name[48];
+                before_take(&bb, b);
                 lss_master *m = master_default();
                 const lss_result *r = run_pass(m, b, &plan);
                 no_false_verdict(issue_network, n, seed, r);
@@ -146,7 +145,9 @@ START_TEST(autoassign_of_the_issue_network) {
                               "seed %u (%u ms stalls): done, 5001 %s (%s)", (unsigned) seed,
                               stall_us[seed % 4] / 1000, moved ? lss_outcome_name(moved->kind) : "without outcome",
                               moved ? moved->message : "");
-                as_found(b, issue_network, n, seed, r->status == LSS_OK ? &issue_network[5].id : NULL, 30);
+                if (r->status == LSS_OK)
+                        before_moved(&bb, &issue_network[5].id, 30);
+                as_found(b, &bb, seed_name(name, sizeof(name), seed));
                 pass_free(m, b);
         }
 }
