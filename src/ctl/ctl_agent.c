@@ -12,6 +12,17 @@
 
 static pid_t agent_pid;
 
+/* The agent prompts on the controlling terminal (/dev/tty): a terminal on
+ * stdin is not enough (`su -c` starts a new session without one, and the
+ * agent would only print an error), as systemd's agents check too. */
+static bool have_controlling_tty(void) {
+        int fd = open("/dev/tty", O_RDONLY | O_NOCTTY | O_CLOEXEC);
+        if (fd < 0)
+                return false;
+        close(fd);
+        return true;
+}
+
 int ctl_agent_open(void) {
         int fds[2];
         pid_t pid;
@@ -19,7 +30,7 @@ int ctl_agent_open(void) {
         if (agent_pid > 0)
                 return 0;
         /* root is never asked; no terminal, nobody to ask; no pkttyagent, no polkit */
-        if (geteuid() == 0 || !isatty(STDIN_FILENO) || access(CTL_POLKIT_AGENT, X_OK) < 0)
+        if (geteuid() == 0 || !isatty(STDIN_FILENO) || !have_controlling_tty() || access(CTL_POLKIT_AGENT, X_OK) < 0)
                 return 0;
         if (pipe2(fds, O_CLOEXEC) < 0)
                 return -errno;
@@ -59,6 +70,10 @@ int ctl_agent_open(void) {
         (void) poll(&p, 1, CTL_AGENT_WAIT_MS);
         close(fds[0]);
         return 1;
+}
+
+bool ctl_agent_running(void) {
+        return agent_pid > 0;
 }
 
 void ctl_agent_close(void) {

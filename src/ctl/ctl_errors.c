@@ -12,7 +12,7 @@ static const ctl_error_info ctl_error_table[] = {
         { SD_BUS_ERROR_INVALID_ARGS, CTL_EXIT_USAGE, "invalid argument" },
         { SD_BUS_ERROR_ACCESS_DENIED, CTL_EXIT_ACCESS_DENIED, "permission denied" },
         { SD_BUS_ERROR_INTERACTIVE_AUTHORIZATION_REQUIRED, CTL_EXIT_ACCESS_DENIED,
-          "authentication required (lssctl asks on a terminal, unless --no-ask-password)" },
+          "authentication required (lssctl asks on the terminal of a login session, unless --no-ask-password)" },
         { LSSD_ERROR_INVALID_FILE_CONTENT, CTL_EXIT_BAD_CONFIG,
           "the configuration file is invalid; lssd keeps the previous one" },
         { SD_BUS_ERROR_SERVICE_UNKNOWN, CTL_EXIT_NOT_RUNNING, "lssd is not running" },

@@ -6,6 +6,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "ctl/ctl_agent.h"
 #include "ctl/ctl_job.h"
 
 #define BAR_WIDTH 30
@@ -234,7 +235,10 @@ int ctl_runner_call(ctl_runner *run, sd_bus_message *m, const char *bus_path, co
         r = sd_bus_call_async(run->c->bus, &call, m, on_reply, run, UINT64_MAX);
         if (r < 0)
                 goto finish;
-        bar_draw(run);
+        /* with an agent, polkit may prompt now: a bar would stand before its
+         * first line; it comes with the first change of the bus instead */
+        if (!ctl_agent_running())
+                bar_draw(run);
         /* not sd_event_loop(): its exit would close the bus, which later calls need */
         run->quit = false;
         while (!run->done && !run->quit) {

@@ -106,6 +106,12 @@ int lssd_auth_decide(lssd_auth *a, lssd_action action, lssd_polkit_answer answer
                 return sd_bus_error_setf(error, SD_BUS_ERROR_INTERACTIVE_AUTHORIZATION_REQUIRED,
                                          "Authentication is required for %s (the call did not allow interactive "
                                          "authorization)", id);
+        case LSSD_POLKIT_NO_AGENT:
+                /* polkit uses a text agent's fallback registration only for a
+                 * process in a login session: "did not allow" would be untrue */
+                return sd_bus_error_setf(error, SD_BUS_ERROR_INTERACTIVE_AUTHORIZATION_REQUIRED,
+                                         "Authentication is required for %s, and polkit found no authentication agent "
+                                         "to ask the caller with (the call allowed interactive authorization)", id);
         case LSSD_POLKIT_ABSENT:
                 if (a->fallback_notes == 0)
                         log_notice("polkit is not available (no %s on the bus): root and group '%s' may use every "
@@ -184,6 +190,8 @@ static int on_polkit(sd_bus_message *reply, void *userdata, sd_bus_error *ret_er
         lssd_auth_query *q = userdata;
         sd_bus_error error = SD_BUS_ERROR_NULL, bad = SD_BUS_ERROR_NULL;
         lssd_polkit_answer answer = read_polkit_reply(reply);
+        if (answer == LSSD_POLKIT_CHALLENGE && sd_bus_message_get_allow_interactive_authorization(q->m) > 0)
+                answer = LSSD_POLKIT_NO_AGENT;
         const sd_bus_error *failure = sd_bus_message_get_error(reply);
 
         if (answer == LSSD_POLKIT_FAILED && !failure) {

@@ -49,6 +49,7 @@ typedef enum lssd_polkit_answer {
         LSSD_POLKIT_YES,       /* is_authorized */
         LSSD_POLKIT_NO,        /* neither authorized nor a challenge */
         LSSD_POLKIT_CHALLENGE, /* authorized after authentication, which the call did not allow */
+        LSSD_POLKIT_NO_AGENT,  /* the same, though the call allowed it: polkit had no agent to ask with */
         LSSD_POLKIT_ABSENT,    /* not on the bus (ServiceUnknown, NameHasNoOwner): polkitd not installed */
         LSSD_POLKIT_FAILED,    /* any other error: timed out, gone while asked (NoReply), a bad reply */
 } lssd_polkit_answer;
@@ -80,7 +81,7 @@ bool lssd_auth_allowed(const lssd_auth *a, uid_t euid, const gid_t *gids, size_t
  * root nor user lssd: 0 allowed; else -EACCES with the error set:
  * AccessDenied naming the action (NO, ABSENT and not in group lssd,
  * FAILED with polkit's error `failure`), InteractiveAuthorizationRequired
- * (CHALLENGE). ABSENT decides by lssd_auth_allowed() and logs once that it
+ * (CHALLENGE, NO_AGENT). ABSENT decides by lssd_auth_allowed() and logs once that it
  * does. */
 int lssd_auth_decide(lssd_auth *a, lssd_action action, lssd_polkit_answer answer, const sd_bus_error *failure,
                      uid_t uid, const gid_t *gids, size_t n_gids, sd_bus_error *error);

@@ -101,6 +101,11 @@ START_TEST(decide_each_answer) {
         ck_assert(sd_bus_error_has_name(&e, SD_BUS_ERROR_INTERACTIVE_AUTHORIZATION_REQUIRED));
         ck_assert_ptr_nonnull(strstr(e.message, "org.lssd.LSS1.raw"));
         sd_bus_error_free(&e);
+        ck_assert_int_lt(lssd_auth_decide(&a, LSSD_ACTION_SCAN, LSSD_POLKIT_NO_AGENT, NULL, 1000, member, 2, &e), 0);
+        ck_assert(sd_bus_error_has_name(&e, SD_BUS_ERROR_INTERACTIVE_AUTHORIZATION_REQUIRED));
+        ck_assert_ptr_nonnull(strstr(e.message, "org.lssd.LSS1.scan"));
+        ck_assert_ptr_nonnull(strstr(e.message, "no authentication agent"));
+        sd_bus_error_free(&e);
 
         /* polkit there but failing: refused, even for a member of group lssd */
         sd_bus_error_set(&failure, SD_BUS_ERROR_NO_REPLY, "gone");
@@ -446,6 +451,20 @@ START_TEST(polkit_challenge) {
 }
 END_TEST
 
+/* polkit's challenge to a call that allowed interaction: it had no agent to
+ * ask with (a text agent outside a login session); the message must not say
+ * the call did not allow it */
+START_TEST(polkit_challenge_interactive) {
+        world_up(PK_CHALLENGE);
+        answer a = call(LSSD_ACTION_SCAN, true);
+        expect_refused(&a, SD_BUS_ERROR_INTERACTIVE_AUTHORIZATION_REQUIRED, LSSD_ACTION_SCAN);
+        ck_assert_uint_eq(w.flags, 1);
+        ck_assert_msg(strstr(a.message, "no authentication agent"), "%s", a.message);
+        ck_assert_msg(!strstr(a.message, "did not allow"), "%s", a.message);
+        world_down();
+}
+END_TEST
+
 /* A call that allows interactive authorization lets polkit ask (flag 1). */
 START_TEST(polkit_interactive_flag) {
         world_up(PK_YES);
@@ -563,6 +582,7 @@ static void add(TCase *tc) {
         tcase_add_test(tc, polkit_yes);
         tcase_add_test(tc, polkit_no);
         tcase_add_test(tc, polkit_challenge);
+        tcase_add_test(tc, polkit_challenge_interactive);
         tcase_add_test(tc, polkit_interactive_flag);
         tcase_add_test(tc, polkit_absent);
         tcase_add_test(tc, polkit_slow);
