@@ -31,7 +31,6 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from lssdtest import BUS_IFACE, ERR, SERVICE, Env, Skip, Slave, bus_path, log, run  # noqa: E402
 
 CONFIG = """
-lss_timeout_ms = @TIMEOUT@;
 buses = (
   {
     interface = "%(ifname)s";

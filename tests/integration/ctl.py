@@ -488,7 +488,7 @@ def test_scan_config():
 
         # lssd with the printed map (the test's LSS timeout in front, as an
         # installed file has its global settings): the bus already matches it
-        env.config = 'lss_timeout_ms = @TIMEOUT@;\n' + out
+        env.config = out
         env.restart_lssd()
         since = len(env.frames('vcan0')) if env.real else 0
         got = ctl.ok('auto-assign', '--json').json
@@ -515,7 +515,7 @@ def test_scan_config():
         # A map entry whose device is gone while another device answers to
         # its node-ID: kept, the printed map would give the node-ID twice, so
         # it is commented out and says why.
-        env.config = ('lss_timeout_ms = @TIMEOUT@;\nbuses = ( { interface = "vcan0"; bitrate = 125000; devices = ( '
+        env.config = ('buses = ( { interface = "vcan0"; bitrate = 125000; devices = ( '
                       '{ vendor = 0xEC; product = 0x1234; serial = 0x9999; node_id = %d; } ); } );\n'
                       % configured[0].node_id)
         env.restart_lssd()
@@ -534,8 +534,7 @@ def test_scan_config():
         listed = [x['serial'] for x in ctl.ok('list', '--json').json]
         expect(0x9999 in listed, 'the gone entry listed before the reload: %r' % listed)
         with open(env.config_path, 'w') as f:
-            f.write(env.config_text('lss_timeout_ms = @TIMEOUT@;\nbuses = ( { interface = "vcan0"; '
-                                    'bitrate = 125000; } );\n'))
+            f.write('buses = ( { interface = "vcan0"; bitrate = 125000; } );\n')
         ctl.ok('reload')
         listed = [x['serial'] for x in ctl.ok('list', '--json').json]
         expect(0x9999 not in listed and configured[0].serial in listed,
@@ -545,7 +544,7 @@ def test_scan_config():
         # keeps its entry at the map's node-ID (as the bus is, it would lose
         # it); one at another node-ID than the map's is mapped where it is,
         # and the line says what the map had.
-        env.config = ('lss_timeout_ms = @TIMEOUT@;\nbuses = ( { interface = "vcan0"; bitrate = 125000; devices = ( '
+        env.config = ('buses = ( { interface = "vcan0"; bitrate = 125000; devices = ( '
                       '{ vendor = 0xEC; product = 0x1234; revision = 0x%x; serial = 0x%x; node_id = 20; }, '
                       '{ vendor = 0xEC; product = 0x1234; revision = 0x%x; serial = 0x%x; node_id = 16; } ); } );\n'
                       % (fresh.identity[2], fresh.serial, configured[1].identity[2], configured[1].serial))
@@ -891,7 +890,7 @@ def test_reload():
     with Env({'vcan0': SLAVES, 'vcan1': []}, config=CONFIG % '') as env:
         ctl = Ctl(env)
         with open(env.config_path, 'w') as f:
-            f.write(env.config_text(CONFIG % VCAN1))
+            f.write(CONFIG % VCAN1)
         expect_eq(ctl.ok('reload').out, 'lssd read its configuration again.\n', 'what reload did')
         expect_eq(ctl.ok('reload', '--quiet').out, '', 'reload --quiet')
         expect_eq([b['interface'] for b in ctl.ok('status', '--json').json['buses']], ['vcan0', 'vcan1'], 'reloaded')

@@ -162,8 +162,6 @@ class Env:
         self.sim_args = list(sim_args)
         self.backend = os.environ.get('LSSD_TEST_BACKEND', 'vcan')
         self.real = self.backend != 'simulate'
-        # a VM under TCG schedules in milliseconds: give the slaves time
-        self.lss_timeout = int(os.environ.get('LSSD_TEST_LSS_TIMEOUT', '200' if os.environ.get('LSSD_IN_VM') else '20'))
         self.t0 = time.monotonic()
         self.procs = []
         self.sims = {}
@@ -191,7 +189,7 @@ class Env:
         return False
 
     def start(self):
-        self.step('start (%s, LSS timeout %d ms)' % (self.backend, self.lss_timeout))
+        self.step('start (%s, lssd at its default timing)' % self.backend)
         if self.real:
             for ifname in self.slaves:
                 if ifname in self.absent:
@@ -298,14 +296,13 @@ class Env:
         if self.config is not None:
             self.config_path = os.path.join(self.dir, 'lssd.conf')
             with open(self.config_path, 'w') as f:
-                f.write(self.config_text(self.config))
+                f.write(self.config)
             # with a configuration: exactly the unit's command line
             cmd += unit_exec_start(self.config_path)
         else:
             cmd += [os.environ.get('LSSD_BINARY', 'lssd')]
             for ifname in self.slaves:
                 cmd += ['--bus', ifname]
-            cmd += ['--lss-timeout', str(self.lss_timeout)]
         if not self.real:
             cmd += ['--simulate']
             for ifname, slaves in self.slaves.items():
@@ -328,10 +325,6 @@ class Env:
         self.lssd = subprocess.Popen(cmd, env=env, stdout=self.lssd_log, stderr=subprocess.STDOUT)
         self.procs.append(self.lssd)
         self.wait_for_name()
-
-    def config_text(self, text):
-        """A configuration with @TIMEOUT@ replaced by the LSS timeout of this run."""
-        return text.replace('@TIMEOUT@', str(self.lss_timeout))
 
     def step(self, what):
         log('[%7.2f s] %s' % (time.monotonic() - self.t0, what))

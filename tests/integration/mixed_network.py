@@ -56,7 +56,7 @@ def one_round(n):
         changes, outcomes, result = auto_assign(env)
         expect_eq(result, 'done', 'AutoAssign of round %d (%r)' % (n, outcomes))
         expect_eq([c[3:] for c in changes], [[0x5001, 23, 30]], 'AutoAssign changes of round %d' % n)
-        expect_eq(node_ids(env), dict(before, **{0x5001: 30}), 'node-IDs after AutoAssign, round %d' % n)
+        expect_eq(node_ids(env), {**before, 0x5001: 30}, 'node-IDs after AutoAssign, round %d' % n)
         expect(all_waiting(env, 'vcan0', SLAVES), 'a slave left in configuration')
 
         env.step('round %d: SetBitrate 250000' % n)

@@ -32,7 +32,6 @@ SLAVES = [
 ]
 
 CONFIG = """
-lss_timeout_ms = @TIMEOUT@;
 buses = (
   {
     interface = "vcan0";
@@ -1091,7 +1090,7 @@ def test_reload():
 
         # a second bus and a changed map
         with open(env.config_path, 'w') as f:
-            f.write(env.config_text(CONFIG % VCAN1).replace('node_id = 5;', 'node_id = 15;'))
+            f.write((CONFIG % VCAN1).replace('node_id = 5;', 'node_id = 15;'))
         env.call(MANAGER, MANAGER_IFACE, 'ReloadConfig')
         expect_eq(env.get(MANAGER, MANAGER_IFACE, 'Buses'), [B0, B1], 'Buses after adding vcan1')
         expect(c.wait_signal(lambda m: m.member == 'InterfacesAdded' and m.body[0] == B1), 'InterfacesAdded')
@@ -1109,7 +1108,7 @@ def test_reload():
 
         # SIGHUP too; vcan1 goes away again
         with open(env.config_path, 'w') as f:
-            f.write(env.config_text(CONFIG % ''))
+            f.write(CONFIG % '')
         env.lssd.send_signal(signal.SIGHUP)
         env.wait_until(lambda: env.get(MANAGER, MANAGER_IFACE, 'Buses') == [B0], what='vcan1 removed')
         expect(c.wait_signal(lambda m: m.member == 'InterfacesRemoved' and m.body[0] == B1), 'InterfacesRemoved')

@@ -135,13 +135,9 @@ int main(int argc, char **argv) {
                 fprintf(stderr, "cannot open %s: %s\n", argv[1], r < 0 ? strerror(-r) : "not up");
                 return 1;
         }
+        /* lssd's own timing (lss_timeout_ms 20, adaptive): what users run */
         lss_timing_config c;
         lss_timing_config_default(&c);
-        /* a VM under TCG schedules in milliseconds, and slower when loaded */
-        c.timeout_us = 100000;
-        c.floor_us = 15000;
-        c.retries = 6;
-        c.bitrate = 0;         /* vcan: no wire time */
         lss_master *m = lss_master_new(&c);
         const lss_result *res;
         int rc = 0;
