@@ -559,6 +559,16 @@ static bool rounds_exhausted(const lss_master *m, const lss_scan_state *s) {
         return s->rounds - finds >= finds + margin || s->rounds >= 2u * LSS_ENUMERATE_MAX_FINDS + margin;
 }
 
+/* How many pings in a row must be silent to end the pass: in a pass that
+ * found somebody (or whose ping was answered: a slave is there) 1 + retries,
+ * else one, as an empty bus costs (e.g. the map's devices all handled);
+ * more when the operation lost frames, so that a slave whose ping or answer
+ * is lost each time is improbable (lss_loss.h). */
+static unsigned pings_to_end(const lss_master *m, const lss_scan_state *s) {
+        unsigned base = finds_of(s) > 0 || s->pinged ? m->timing.cfg.retries + 1u : 1u;
+        return lss_loss_asks(&m->loss, 1, base);
+}
+
 int proc_enumerate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
@@ -618,10 +628,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 break;
                         s->pinged = s->pinged || s->fs.heard;
                         if (s->fs.none) {
-                                /* (a pass that found nobody, e.g. the map's devices
-                                 * all handled, asks once, as an empty bus costs;
-                                 * not when a ping was answered: a slave is there) */
-                                if (s->looks++ >= (finds_of(s) > 0 || s->pinged ? m->timing.cfg.retries : 0)) {
+                                if (s->looks++ + 1 >= pings_to_end(m, s)) {
                                         /* set nobody aside: nobody gets 255 back */
                                         s->nobody = s->n_cand == 0 && s->fs.silent;
                                         break;
@@ -636,6 +643,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 PT_CALL(&s->pc, reselect_kept(m, s));
                                 continue;
                         }
+                        if (s->looks > 0) /* a silent ping was wrong: lost, or somebody uncounted */
+                                lss_loss_answered(&m->loss, s->looks, 1);
                         s->looks = 0;
                         if (!s->fs.found) {
                                 if (++s->failed_scans <= m->timing.cfg.retries)
