@@ -609,8 +609,10 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                                        .ping_again = s->looks > 0 };
                         /* A Scan that finds nobody says the bus is empty, and
                          * nothing checks that later: its ping may be answered by
-                         * slaves slower than the timeout, after the step. */
-                        if (s->listen && finds_of(s) == 0)
+                         * slaves slower than the timeout, after the step. So
+                         * may the last ping of one that found some (a host
+                         * that stalls the slaves: the VM's lss-sim). */
+                        if (s->listen && (finds_of(s) == 0 || s->looks + 1 >= pings_to_end(m, s)))
                                 s->fs.ping_late_us = lss_timing_listen_guard(&m->timing);
                         if (finds_of(s) > 0) {
                                 /* vendor, product and revision of the last find: likely those of the next */
