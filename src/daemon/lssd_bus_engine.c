@@ -56,6 +56,10 @@ static void bus_job_end(lssd_bus *b) {
                 log_debug("%s: %" PRIu64 " answers came after the adaptive wait (%" PRIu64 " after their step had "
                           "ended): waited up to %u ms", b->ifname, late + stray, stray,
                           (unsigned) us_to_ms_up(st->patience_us));
+        if (st->rechecks > at->rechecks)
+                log_notice("%s: %" PRIu64 " enumeration rounds asked again with waits of a verdict before naming a "
+                           "slave misbehaving (answers came 100 ms and more late: a loaded host?)",
+                           b->ifname, st->rechecks - at->rechecks);
         b->job = NULL;
         b->changed |= LSSD_BUS_CHANGED_JOB;
         bus_set_progress(b, 0);

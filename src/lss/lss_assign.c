@@ -75,6 +75,9 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
         } else {
                 REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                                 LSS_CS_INQUIRE_NODE_ID);
+                AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->tail_pc, s->attempt,
+                                                             lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                                             LSS_CS_INQUIRE_NODE_ID));
                 if (!inquired_node_id_ok(m))
                         goto out;
                 s->old = m->result.node_id;
@@ -119,6 +122,9 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
         s->configuring = true;
         REQUEST_RETRIED_ENDS(m, &s->tail_pc, s->attempt, lss_encode_configure_node_id(&f__, s->node_id),
                              LSS_CS_CONFIGURE_NODE_ID, s->lone);
+        AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->tail_pc, s->attempt,
+                                                     lss_encode_configure_node_id(&f__, s->node_id),
+                                                     LSS_CS_CONFIGURE_NODE_ID));
         if (!configure_answer_ok(m, s->node_id))
                 goto out;
         m->result.changed = true;
@@ -126,6 +132,8 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
 store:
         if (s->flags & LSS_ASSIGN_STORE) {
                 REQUEST_RETRIED_ENDS(m, &s->tail_pc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE, s->lone);
+                AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_store(&f__),
+                                                             LSS_CS_STORE));
                 if (!store_answer_ok(m))
                         goto out;
         }
@@ -194,6 +202,9 @@ int proc_assign(lss_master *m, lss_assign_state *s) {
         STEP_RETRIED_UP_TO(m, &s->pc, s->attempt,
                            s->first_look && m->timing.n_samples == 0 ? 1u : m->timing.cfg.retries,
                            step_selective(m, &s->id));
+        /* a device just found is not missing for a silence: a stall, likely */
+        if (!s->first_look)
+                AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->pc, s->attempt, &s->id));
         if (!step_answered(m)) {
                 master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_SWITCH_SELECTIVE, LSS_REASON_NO_ANSWER,
                                "no slave %08x:%08x:%08x:%08x answered the selective switch", s->id.vendor,

@@ -18,9 +18,6 @@
 #include "lss/lss_internal.h"
 
 #define SEND(m, pc, frame_expr) STEP_REQUEST(m, pc, frame_expr, -1)
-/* A device that fell silent is a verdict: its asks wait at least this long
- * (a loaded host stalls an answer for 100-200 ms), twice */
-#define VERDICT_WAIT_FLOOR_US 250000u
 
 /* The answer of the step just done, from one slave, with this cs. */
 static bool one_answer(const lss_master *m) {
@@ -68,7 +65,7 @@ int proc_assign_unverified(lss_master *m, lss_assign_state *s) {
 
         s->patient = !m->patient;
         if (s->patient)
-                master_patient_begin(m, lss_timing_patient_wait(&m->timing, VERDICT_WAIT_FLOOR_US));
+                master_patient_begin(m, lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US));
         SELECT_RETRIED(m, &s->vpc, s->attempt, &s->id);
         if (!step_answered(m)) {
                 m->result.may_hold = true;

@@ -336,10 +336,8 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
                 m->sc.no_set_aside = s->plan->dry_run;
                 s->direct = (lss_enum_direct) { .choose = direct_choose, .done = direct_done, .ud = s };
                 m->sc.direct = s->plan->unknown == LSS_UNKNOWN_POOL && !s->plan->dry_run ? &s->direct : NULL;
-                /* the second look asks patiently for what the map has; a
-                 * device for the pool has no second look: the ping that would
-                 * end the pass empty listens, as a Scan's */
-                m->sc.listen = s->plan->unknown == LSS_UNKNOWN_POOL;
+                m->sc.listen = false; /* the second look asks patiently for what the map has */
+                m->sc.patient_end = s->plan->unknown == LSS_UNKNOWN_POOL || s->plan->replace;
                 m->sc.pc = m->sc.vpc = 0;
                 s->given_before = aa_count_given(s);
                 PT_CALL(&s->e_pc, proc_enumerate(m, &m->sc));

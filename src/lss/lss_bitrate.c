@@ -123,6 +123,8 @@ static int configure_each(lss_master *m, lss_bitrate_state *s) {
                                 LSS_CS_CONFIGURE_BIT_TIMING);
                 s->configuring = false;
                 d = &s->p.devices[s->i];
+                if (!step_answered(m) || step_conflict(m))
+                        s->unsure = s->i + 1; /* its answer lost, or a second slave's */
                 if (!step_answered(m)) {
                         d->outcome = LSS_BITRATE_SILENT;
                         master_fail_at(m, LSS_E_REJECTED, LSS_SERVICE_CONFIGURE_BIT_TIMING, LSS_REASON_NO_ANSWER,
@@ -276,14 +278,15 @@ static int verify_each(lss_master *m, lss_bitrate_state *s) {
 }
 
 /* Nothing activated; the devices that accepted go back to the old timing,
- * or a later Store Configuration would persist the new one. */
+ * or a later Store Configuration would persist the new one; so does the
+ * one whose answer was lost or not alone (it may have taken it). */
 static int revert(lss_master *m, lss_bitrate_state *s) {
         PT_BEGIN(&s->cpc);
         SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         if (!s->can_revert)
                 goto out;
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
-                if (s->p.devices[s->i].outcome != LSS_BITRATE_CONFIGURED)
+                if (s->p.devices[s->i].outcome != LSS_BITRATE_CONFIGURED && s->unsure != s->i + 1)
                         continue;
                 step_selective(m, &s->p.devices[s->i].id);
                 PT_YIELD(&s->cpc);
@@ -291,7 +294,9 @@ static int revert(lss_master *m, lss_bitrate_state *s) {
                         continue;
                 STEP_REQUEST(m, &s->cpc, lss_encode_configure_bit_timing(&f__, 0, s->old_index),
                              LSS_CS_CONFIGURE_BIT_TIMING);
-                if (step_answered(m) && !step_conflict(m) && m->step.answer.data[1] == 0)
+                /* the unsure one keeps its outcome (silent, or none for a conflict) */
+                if (step_answered(m) && !step_conflict(m) && m->step.answer.data[1] == 0 &&
+                    s->p.devices[s->i].outcome == LSS_BITRATE_CONFIGURED)
                         s->p.devices[s->i].outcome = LSS_BITRATE_REVERTED;
                 SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         }

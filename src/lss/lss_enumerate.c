@@ -140,6 +140,32 @@ static int reselect_kept(lss_master *m, lss_scan_state *s) {
         PT_END(&s->rpc);
 }
 
+/* A configured slave that answers Fastscan in configuration: a device of
+ * the result at once (it answered a selection and Inquire Node-ID), no
+ * candidate: in waiting it takes no part in Fastscan, and kept in
+ * configuration it would answer every request of the rounds after. */
+static int let_go(lss_master *m, const lss_identity *id, uint8_t node) {
+        if (master_add_device(m, id, node) < 0) {
+                master_fail(m, LSS_E_INCOMPLETE, "out of memory");
+                return -ENOMEM;
+        }
+        return 0;
+}
+
+/* One request only F could match, in configuration state: F's serial as
+ * the field expected after it. */
+static int ask_fastscan_in_configuration(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->qpc);
+        lss_frame f;
+        lss_encode_fastscan(&f, s->found.serial, 0, LSS_FIELD_SERIAL, LSS_FIELD_SERIAL);
+        step_lss(m, LSS_CS_IDENTIFY_SLAVE);
+        step_add_tx(m, &f);
+        m->step.silence_answers = true;
+        step_start(m);
+        PT_YIELD(&s->qpc);
+        PT_END(&s->qpc);
+}
+
 /* Does F, which the last confirmation put in configuration state, answer
  * Fastscan there? One request only F could match (its serial, with the
  * serial as the field expected: a slave in waiting is at that field only
@@ -150,16 +176,24 @@ static int reselect_kept(lss_master *m, lss_scan_state *s) {
 static int answers_in_configuration(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->kpc);
         s->bends = false;
-        for (s->k = 0; s->k < 2 && !s->bends; s->k++) {
-                lss_frame f;
-                lss_encode_fastscan(&f, s->found.serial, 0, LSS_FIELD_SERIAL, LSS_FIELD_SERIAL);
-                step_lss(m, LSS_CS_IDENTIFY_SLAVE);
-                step_add_tx(m, &f);
-                m->step.silence_answers = true;
-                step_start(m);
-                PT_YIELD(&s->kpc);
+        for (s->k = 0; s->k < m->timing.cfg.retries && s->k < 2 && !s->bends; s->k++) {
+                PT_CALL(&s->kpc, ask_fastscan_in_configuration(m, s));
                 s->bends = step_answered(m);
         }
+        if (!s->bends)
+                goto out;
+        /* A stalled host's answers to the fastscan just done (a slave's
+         * answers queue: they come in a burst) look the same: asked again
+         * once they could all have come, it still answers. */
+        m->step = (lss_step) { .kind = STEP_DELAY, .wait_us = lss_timing_patient_wait(&m->timing, 0) };
+        step_start(m);
+        PT_YIELD(&s->kpc);
+        s->bends = false;
+        for (s->k = 0; s->k < m->timing.cfg.retries && s->k < 2 && !s->bends; s->k++) {
+                PT_CALL(&s->kpc, ask_fastscan_in_configuration(m, s));
+                s->bends = step_answered(m);
+        }
+out:;
         PT_END(&s->kpc);
 }
 
@@ -215,13 +249,21 @@ static int set_aside(lss_master *m, lss_scan_state *s) {
         s->temp_free[s->temp] = false;
         REQUEST_RETRIED(m, &s->apc, s->attempt, lss_encode_configure_node_id(&f__, s->temp),
                         LSS_CS_CONFIGURE_NODE_ID);
-        if (!step_answered(m) || step_conflict(m)) {
-                master_fail(m, LSS_E_INCOMPLETE, "slave " ID_FMT " did not take a temporary node-ID (%s)",
-                            ID_ARGS(s->found), !step_answered(m) ? "no answer" : "several answers");
-                goto out;
-        }
+        AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->apc, s->attempt,
+                                                     lss_encode_configure_node_id(&f__, s->temp),
+                                                     LSS_CS_CONFIGURE_NODE_ID));
         if (cand_add(s, &s->found) < 0) {
                 master_fail(m, LSS_E_INCOMPLETE, "out of memory");
+                goto out;
+        }
+        if (!step_answered(m) || step_conflict(m)) {
+                /* it may have taken T: given back with the others at the end */
+                s->cand[s->n_cand - 1].node_id = 0;
+                s->cand[s->n_cand - 1].aside_node_id = s->temp;
+                s->back_due[s->temp] = true;
+                s->n_aside++;
+                master_fail(m, LSS_E_INCOMPLETE, "slave " ID_FMT " did not take a temporary node-ID (%s)",
+                            ID_ARGS(s->found), !step_answered(m) ? "no answer" : "several answers");
                 goto out;
         }
         if (m->step.answer.data[1] != 0) {
@@ -379,6 +421,17 @@ out:;
         PT_END(&s->dpc);
 }
 
+/* A verdict that ends the pass on slaves that did not answer as CiA 305
+ * says is given only when a round with patient waits shows it again: a
+ * stalled host (answers 100-200 ms late, taken for those of later steps)
+ * makes compliant slaves look like that. True: ask again, patiently. */
+static bool recheck_first(lss_scan_state *s) {
+        if (s->patient_round)
+                return false;
+        s->recheck = true;
+        return true;
+}
+
 static void misbehaving(lss_master *m, lss_scan_state *s, const lss_identity *id, const char *what) {
         m->result.id = *id;
         s->misbehaving = true;
@@ -392,7 +445,7 @@ static void misbehaving(lss_master *m, lss_scan_state *s, const lss_identity *id
 static int handle_found(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->hpc);
         s->cpc = 0;
-        s->selected = s->took = s->switched = false;
+        s->selected = s->took = s->switched = s->let_go = false;
         s->kept_now = SIZE_MAX;
         /* Only a slave that answers Fastscan in configuration state needs
          * setting aside with a node-ID; any other stays there, untouched */
@@ -426,6 +479,8 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                  * nobody answers, F was made up). Only a slave that does it
                  * again is named. */
                 if (s->n_other++ > 0 && lss_identity_equal(&s->other, &s->other_before)) {
+                        if (recheck_first(s))
+                                goto out;
                         misbehaving(m, s, &s->other, "entered configuration state on a Fastscan for another "
                                     "identity, twice");
                         goto out;
@@ -460,6 +515,8 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                  * Fastscan with a node-ID): keep it in configuration. Found
                  * there too, it answers in every state. */
                 if (kept(s->again) || s->node == LSS_NODE_ID_UNCONFIGURED) {
+                        if (recheck_first(s))
+                                goto out;
                         misbehaving(m, s, &s->found, s->no_set_aside
                                     ? "answers Fastscan in configuration state (a dry run sets nobody aside "
                                       "with a temporary node-ID, which such a slave needs)"
@@ -477,6 +534,8 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 /* nobody in configuration: the identity was made of answers
                  * to requests that matched nobody */
                 if (s->phantoms++ > 0 && s->no_set_aside && s->n_kept > 0) {
+                        if (recheck_first(s))
+                                goto out;
                         /* slaves kept in configuration answered too: name a
                          * confirmed one, never the made-up identity */
                         m->result.id = s->cand[s->n_cand - 1].id;
@@ -488,6 +547,8 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 }
                 if (s->phantoms > 1 && (lss_identity_equal(&s->found, &s->phantom) ||
                                         s->phantoms > m->timing.cfg.retries)) {
+                        if (recheck_first(s))
+                                goto out;
                         m->result.id = s->found;
                         s->misbehaving = true;
                         master_fail(m, LSS_E_CONFLICT,
@@ -498,6 +559,15 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 }
                 s->phantom = s->found;
         } else if (s->confirm == CONFIRM_UNCLEAR) {
+                SEND(m, &s->hpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                s->switched = true;
+        } else if (s->bends && s->node != LSS_NODE_ID_UNCONFIGURED) {
+                /* configured, and it answers every Fastscan in configuration
+                 * (CANopenNode; found on late answers of others): back to
+                 * waiting, where it takes no part, a device found */
+                s->let_go = true;
+                if (let_go(m, &s->found, s->node) < 0)
+                        goto out;
                 SEND(m, &s->hpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
                 s->switched = true;
         } else if (s->node != LSS_NODE_ID_UNCONFIGURED || s->no_set_aside) {
@@ -531,7 +601,8 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 s->last_found = s->found;
                 /* confirmed by its own answers and now a candidate: tell the
                  * caller at once (a slave set aside gets 255 back at the end) */
-                master_found(m, &s->found, s->node, s->took ? 0 : s->cand[s->n_cand - 1].aside_node_id);
+                master_found(m, &s->found, s->node,
+                             s->took || s->let_go ? 0 : s->cand[s->n_cand - 1].aside_node_id);
                 s->switched = s->switched || s->took;
         }
 reselect:
@@ -559,14 +630,87 @@ static bool rounds_exhausted(const lss_master *m, const lss_scan_state *s) {
         return s->rounds - finds >= finds + margin || s->rounds >= 2u * LSS_ENUMERATE_MAX_FINDS + margin;
 }
 
-/* How many pings in a row must be silent to end the pass: in a pass that
- * found somebody (or whose ping was answered: a slave is there) 1 + retries,
- * else one, as an empty bus costs (e.g. the map's devices all handled);
- * more when the operation lost frames, so that a slave whose ping or answer
- * is lost each time is improbable (lss_loss.h). */
-static unsigned pings_to_end(const lss_master *m, const lss_scan_state *s) {
+/* Each slave kept in configuration, alone there, asked patiently whether
+ * it answers Fastscan in configuration state: one that does is set aside
+ * now (non-configured) or let go. The kept are all back in waiting after it. */
+static int reexamine_kept(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->xpc);
+        for (s->x = 0; s->x < s->n_cand; s->x++) {
+                if (!kept(&s->cand[s->x]))
+                        continue;
+                SEND(m, &s->xpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                SELECT_RETRIED(m, &s->xpc, s->attempt, &s->cand[s->x].id);
+                if (!step_answered(m) || step_conflict(m))
+                        continue;
+                s->found = s->cand[s->x].id;
+                s->kpc = 0;
+                PT_CALL(&s->xpc, answers_in_configuration(m, s));
+                if (!s->bends)
+                        continue;
+                /* no longer kept: set aside as a new candidate, or let go (configured) */
+                s->node = s->cand[s->x].node_id;
+                memmove(&s->cand[s->x], &s->cand[s->x + 1], (s->n_cand - s->x - 1) * sizeof(s->cand[0]));
+                s->n_cand--;
+                s->n_kept--;
+                s->x--;
+                if (s->node != LSS_NODE_ID_UNCONFIGURED) {
+                        if (let_go(m, &s->found, s->node) < 0)
+                                goto out;
+                        continue;
+                }
+                s->apc = 0;
+                s->restore = true;
+                PT_CALL(&s->xpc, set_aside(m, s));
+                if (m->result.status != LSS_OK)
+                        goto out;
+        }
+        SEND(m, &s->xpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+out:;
+        PT_END(&s->xpc);
+}
+
+/* The round after one that ended on a verdict (recheck_first()): every
+ * slave back to waiting (the kept ones selected again), and waits as long
+ * as for a device that fell silent. */
+static int begin_patient_round(lss_master *m, lss_scan_state *s) {
+        PT_BEGIN(&s->bpc);
+        s->recheck = false;
+        s->patient_round = true;
+        /* the patient rounds get the margins again, and show a verdict anew */
+        s->rounds = (unsigned) finds_of(s);
+        s->failed_scans = s->phantoms = s->n_other = 0;
+        m->stats.rechecks++;
+        master_patient_begin(m, lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US));
+        if (s->n_kept > 0 && !s->no_set_aside) {
+                /* a kept one may answer every request: its answers to the
+                 * set-aside check were held back */
+                s->xpc = 0;
+                PT_CALL(&s->bpc, reexamine_kept(m, s));
+                if (m->result.status != LSS_OK)
+                        goto out;
+        } else {
+                SEND(m, &s->bpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        }
+        s->rpc = 0;
+        PT_CALL(&s->bpc, reselect_kept(m, s));
+out:;
+        PT_END(&s->bpc);
+}
+
+/* Answers came late or after their step on this bus (the master's
+ * counts over its life, and the patience they left): its host or the bus
+ * stalls now and then. */
+static bool stalls_seen(const lss_master *m) {
+        return m->stats.late_answers > 0 || m->stats.stray_answers > 0 || m->timing.patience_us > 0;
+}
+
+/* The looks for anybody left after a silent ping: one on a bus where
+ * nobody answered yet (an empty bus costs), else cfg.retries more; more
+ * when the operation lost frames, so that a slave whose ping or answer is
+ * lost each time is improbable (lss_loss.h). */
+static unsigned last_look(const lss_master *m, const lss_scan_state *s) {
         unsigned base = finds_of(s) > 0 || s->pinged ? m->timing.cfg.retries + 1u : 1u;
-        return lss_loss_asks(&m->loss, 1, base);
+        return lss_loss_asks(&m->loss, 1, base) - 1u;
 }
 
 int proc_enumerate(lss_master *m, lss_scan_state *s) {
@@ -576,6 +720,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
         for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
                 s->n_cand = s->n_direct = s->n_aside = s->n_kept = 0;
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
+                s->recheck = s->patient_round = false;
                 s->next_temp = LSS_NODE_ID_MAX;
                 memset(s->back_due, 0, sizeof(s->back_due));
                 memset(s->held, 0, sizeof(s->held));
@@ -587,6 +732,12 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                 /* nobody left in configuration from before */
                 SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
                 while (!m->cancelling) {
+                        if (rounds_exhausted(m, s) && recheck_first(s)) {
+                                s->bpc = 0;
+                                PT_CALL(&s->pc, begin_patient_round(m, s));
+                                if (m->result.status != LSS_OK)
+                                        break;
+                        }
                         if (rounds_exhausted(m, s)) {
                                 master_fail(m, LSS_E_INCOMPLETE, "the enumeration stopped: %u of its %u fastscan "
                                             "rounds found nobody new (%zu slaves found)",
@@ -609,11 +760,16 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                                        .ping_again = s->looks > 0 };
                         /* A Scan that finds nobody says the bus is empty, and
                          * nothing checks that later: its ping may be answered by
-                         * slaves slower than the timeout, after the step. So
-                         * may the last ping of one that found some (a host
-                         * that stalls the slaves: the VM's lss-sim). */
-                        if (s->listen && (finds_of(s) == 0 || s->looks + 1 >= pings_to_end(m, s)))
+                         * slaves slower than the timeout, after the step. */
+                        if (s->listen && finds_of(s) == 0)
                                 s->fs.ping_late_us = lss_timing_listen_guard(&m->timing);
+                        /* The last look ends the pass when silent: an answer a
+                         * stalled host holds back must still reach it (a slave's
+                         * answers queue, so it holds back all of them), where
+                         * nothing looks again for what it misses or this bus has
+                         * stalled before. */
+                        if (s->looks >= last_look(m, s) && (s->patient_end || stalls_seen(m)))
+                                s->fs.ping_late_us = lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US);
                         if (finds_of(s) > 0) {
                                 /* vendor, product and revision of the last find: likely those of the next */
                                 s->fs.guess = s->last_found;
@@ -630,7 +786,15 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 break;
                         s->pinged = s->pinged || s->fs.heard;
                         if (s->fs.none) {
-                                if (s->looks++ + 1 >= pings_to_end(m, s)) {
+                                /* a ping answered, a later one silent: a slave went
+                                 * into configuration on an answer that came late,
+                                 * uncounted; the looks for nobody begin again */
+                                if (s->fs.heard && s->fs.silent)
+                                        s->looks = 0;
+                                /* (a pass that found nobody, e.g. the map's devices
+                                 * all handled, asks once, as an empty bus costs;
+                                 * not when a ping was answered: a slave is there) */
+                                if (s->looks++ >= last_look(m, s)) {
                                         /* set nobody aside: nobody gets 255 back */
                                         s->nobody = s->n_cand == 0 && s->fs.silent;
                                         break;
@@ -651,6 +815,13 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         if (!s->fs.found) {
                                 if (++s->failed_scans <= m->timing.cfg.retries)
                                         continue;
+                                if (recheck_first(s)) {
+                                        s->bpc = 0;
+                                        PT_CALL(&s->pc, begin_patient_round(m, s));
+                                        if (m->result.status != LSS_OK)
+                                                break;
+                                        continue;
+                                }
                                 master_fail(m, LSS_E_INCOMPLETE, "fastscan did not converge after %zu slaves",
                                             finds_of(s));
                                 break;
@@ -661,6 +832,20 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         PT_CALL(&s->pc, handle_found(m, s));
                         if (m->result.status != LSS_OK)
                                 break;
+                        if (s->confirm == CONFIRM_UNCLEAR && s->failed_scans + 1 > m->timing.cfg.retries)
+                                recheck_first(s);
+                        if (s->recheck) {
+                                s->bpc = 0;
+                                PT_CALL(&s->pc, begin_patient_round(m, s));
+                                if (m->result.status != LSS_OK)
+                                        break;
+                                continue;
+                        }
+                        if (s->confirm == CONFIRM_OK && s->patient_round) {
+                                /* shown right after all: back to the waits of the bus */
+                                master_patient_end(m);
+                                s->patient_round = false;
+                        }
                         if (s->confirm == CONFIRM_UNCLEAR && ++s->failed_scans > m->timing.cfg.retries) {
                                 master_fail(m, LSS_E_CONFLICT, "the slave found by fastscan (" ID_FMT ") could not "
                                             "be confirmed: several slaves answered", ID_ARGS(s->found));
@@ -668,6 +853,10 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         }
                         if (s->confirm == CONFIRM_OK)
                                 s->failed_scans = 0;
+                }
+                if (s->patient_round) {
+                        master_patient_end(m);
+                        s->patient_round = false;
                 }
                 /* also after a failure or a cancel: nobody keeps a temporary node-ID */
                 s->vpc = 0;

@@ -195,7 +195,7 @@ typedef struct lss_enum_direct {
 } lss_enum_direct;
 
 typedef struct lss_scan_state {
-        int pc, vpc, cpc, apc, rpc, hpc;
+        int pc, vpc, cpc, apc, rpc, hpc, bpc;
         /* enumeration: bounds, what the last fastscan found, devices set aside */
         unsigned rounds, phantoms, n_kept, n_aside, field, stuck;
         bool restore;           /* slaves are set aside: a cancel waits for their give-back */
@@ -212,7 +212,7 @@ typedef struct lss_scan_state {
         double prog_base0, prog_span0; /* the caller's progress frame */
         unsigned gb_try;
         bool selected;          /* this round confirmed by a selective switch (all went to waiting first) */
-        int kpc;                /* answers_in_configuration() */
+        int kpc, qpc;           /* answers_in_configuration(), ask_fastscan_in_configuration() */
         unsigned k;
         bool bends;             /* this round's slave answers Fastscan in configuration state: set it aside */
         bool switched;          /* this round sent the slaves kept in configuration to waiting */
@@ -221,6 +221,12 @@ typedef struct lss_scan_state {
         bool nobody;            /* the pass ended on a silent ping and set nobody aside (nobody got
                                  * 255 back at its end): no slave is non-configured */
         bool listen;            /* a Scan: a ping that would end a pass empty listens as long as patience may grow */
+        bool patient_end;       /* the last look waits as a verdict does: nothing looks again for
+                                 * what it misses (a Scan; AutoAssign's pool and replacements) */
+        bool recheck;           /* this round ended on a verdict: the next one runs with patient waits */
+        bool patient_round;     /* this round runs with patient waits: a verdict in it is given */
+        int xpc;                /* reexamine_kept() */
+        size_t x;
         uint64_t deadline;
         lss_identity found, other, phantom;
         lss_identity other_before;  /* the last slave that confirmed another identity than found */
@@ -236,6 +242,8 @@ typedef struct lss_scan_state {
         lss_probe_state *dprobe;
         size_t n_direct;        /* slaves that took their node-ID at once: finds, not candidates */
         bool took;              /* this round's slave did (or failed to after Configure Node-ID) */
+        bool let_go;            /* this round's slave is configured and answers Fastscan in
+                                 * configuration: a device, no candidate */
         lss_identity last_found; /* the last slave confirmed (its fields are the next fastscan's guess) */
         lss_fastscan_known known;
         lss_identify_range range;
@@ -265,6 +273,8 @@ typedef struct lss_bitrate_state {
         enum lss_retune retune;
         unsigned answers;       /* global: most answers to one Configure Bit Timing */
         bool configuring;       /* a Configure Bit Timing to the new rate is out, not answered yet */
+        size_t unsure;          /* 1 + the device whose Configure Bit Timing had no clear answer (0: none):
+                                 * it may have taken the rate, and is configured back too */
         bool foreign;           /* another master was heard in the committed window */
         char foreign_frame[32]; /* ... its request */
 } lss_bitrate_state;
@@ -428,6 +438,16 @@ void master_progress(lss_master *m, double p);
  * (or the next operation's start: a cancel may skip the end). */
 void master_patient_begin(lss_master *m, uint32_t wait_us);
 void master_patient_end(lss_master *m);
+/* A step whose silence would end in a verdict, asked again with patient
+ * waits when silent (only requests that may be repeated: an inquiry, the
+ * same Configure or Store): a stalled host holds answers back 100-200 ms,
+ * far beyond any timeout. */
+#define AGAIN_PATIENTLY_IF_SILENT(m, step_stmt) \
+        if (!step_answered(m) && !(m)->patient) { \
+                master_patient_begin(m, lss_timing_patient_wait(&(m)->timing, LSS_VERDICT_WAIT_FLOOR_US)); \
+                step_stmt; \
+                master_patient_end(m); \
+        }
 
 /* procedures */
 int proc_fastscan(lss_master *m, lss_fastscan_state *s);

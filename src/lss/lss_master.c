@@ -199,11 +199,28 @@ static void finish(lss_master *m) {
         m->stats.latency_max_us = lss_timing_max(&m->timing);
 }
 
+static void cancel_now(lss_master *m) {
+        master_fail(m, LSS_E_CANCELLED, "cancelled");
+        queue_switch_waiting(m);
+        finish(m);
+}
+
+/* A cancel put off while an assignment's Configure Node-ID was out is
+ * due once the assignment is over (lss_master_cancel). */
+static bool cancel_due(const lss_master *m) {
+        return m->cancelling && !m->sc.restore && !m->as.configuring;
+}
+
 /* Run the procedure for as long as it does not wait for the bus. */
 static void advance(lss_master *m) {
         while (m->running) {
-                if (m->step.phase != PHASE_DONE && m->step.phase != PHASE_IDLE)
+                if (m->step.phase != PHASE_DONE && m->step.phase != PHASE_IDLE) {
+                        if (cancel_due(m)) {
+                                m->txq_len = 0; /* the next step's request is not sent */
+                                cancel_now(m);
+                        }
                         return;
+                }
                 if (m->proc(m) == PT_DONE) {
                         /* procedures (not raw services) leave every slave in waiting,
                          * also on failure */
@@ -678,7 +695,7 @@ static int start_enumerate(lss_master *m, const lss_fastscan_known *known, bool 
         m->sc.direct = NULL;
         m->sc.keep_stopped = keep_stopped;
         m->sc.no_set_aside = false;
-        m->sc.listen = true;
+        m->sc.listen = m->sc.patient_end = true;
         return start_op(m, proc_enumerate_top, true, now);
 }
 
@@ -866,9 +883,12 @@ void lss_master_cancel(lss_master *m, uint64_t now) {
         m->cancelling = true;
         if (m->sc.restore)
                 return; /* the enumeration gives the slaves it set aside back their 255 first */
-        master_fail(m, LSS_E_CANCELLED, "cancelled");
-        queue_switch_waiting(m);
-        finish(m);
+        /* An assignment whose Configure Node-ID went out ends first,
+         * verified and reported: cut off, the slave would keep the node-ID
+         * pending, or hold it with no outcome saying so. */
+        if (m->as.configuring)
+                return;
+        cancel_now(m);
 }
 
 bool lss_master_next_tx(lss_master *m, lss_frame *f) {

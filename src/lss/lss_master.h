@@ -176,6 +176,8 @@ typedef struct lss_result {
 typedef struct lss_master_stats {
         uint64_t steps, retries, timeouts, late_answers, ignored_frames, stale_frames, conflicts;
         uint64_t stray_answers;                  /* LSS answers that came after their step had ended */
+        uint64_t rechecks;                       /* enumeration rounds asked again with patient waits
+                                                    before a verdict on a slave (lss_enumerate.c) */
         uint32_t patience_us;                    /* the operation's longest wait beyond the configured
                                                     timeout that late answers called for (0: none) */
         uint32_t latency_min_us, latency_max_us; /* recent answer latency window */

@@ -99,6 +99,7 @@ static void step_identify_item(lss_master *m, const lss_scan_state *s, const lss
 static int verify_candidate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->vpc);
         SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->n_cand - 1].id);
+        AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->n_cand - 1].id));
         if (!step_answered(m)) {
                 STEP_RETRIED(m, &s->vpc, s->attempt, step_identify_item(m, s, &s->cur));
                 if (!step_answered(m)) {

@@ -39,6 +39,10 @@
 #define LSS_PATIENCE_MAX_US 1000000u
 #define LSS_PATIENCE_FACTOR 4u
 #define LSS_EARLY_MIN_SAMPLES 8u
+/* A silence that ends in a verdict (a device missing, nobody left to find,
+ * a slave named misbehaving) is waited for at least this long: a loaded
+ * host stalls an answer for 100-200 ms, far beyond any timeout. */
+#define LSS_VERDICT_WAIT_FLOOR_US 250000u
 /* ... but an answer far sooner than the first few is judged early already:
  * a late answer taken for its own there read a bit of a pass's first
  * fastscan wrong (a VM candump: 0.15 ms into the step, with 3 samples of

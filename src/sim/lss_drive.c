@@ -41,8 +41,10 @@ const lss_result *lss_drive(lss_master *m, membus *bus, uint64_t limit_us, lss_d
                         lss_master_on_time(m, membus_now(bus));
                         flush_tx(m, bus);
                 }
-                if (hook)
+                if (hook) {
                         hook(ud, bus, m);
+                        flush_tx(m, bus); /* what a cancel from the hook queued */
+                }
         }
         /* let the last frames (switch to waiting) reach the slaves */
         membus_advance(bus, membus_now(bus) + 2000);

@@ -144,7 +144,8 @@ END_TEST
  * against 20; in the VM, lss-sim stalled by a loaded host): the ping that
  * would end the pass empty is answered after its step. Before, the pass
  * found nobody and replied "done" with every slave non-configured (VM
- * integration loss-pool-drop, round 3); its ping now listens as a Scan's. */
+ * integration loss-pool-drop, round 3); its last look, nothing looking
+ * again after it, waits as a verdict does. */
 START_TEST(pool_pass_finds_slow_slaves) {
         lss_slave_faults f = faults_latency(40000, 2000);
         membus *b = bus_random(3, 4300, 0x9A, 3, &f);

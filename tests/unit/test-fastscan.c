@@ -640,10 +640,11 @@ static void time_silent_pings(void *ud, const lss_frame *f, uint64_t t) {
 
 /* After the last find the pass pings retries + 1 times before it ends: the
  * first ping waits the timeout (slow slaves answer it), the looks again are
- * for a slave that lost it and wait as answered steps do. Before, each
- * waited the timeout and its late guard (25 ms). The last one, which ends a
- * Scan, listens as long as patience may grow: a host that stalls the slaves
- * (the VM's lss-sim, loss-pool-drop round 4) answered it after its step. */
+ * for a slave that lost it and wait as answered steps do (before, each
+ * waited the timeout and its late guard, 25 ms); the last one, whose
+ * silence ends a Scan, waits as long as a verdict does (a host that
+ * stalls holds a slave's answers back 100-200 ms, with no sign before:
+ * test-stalls.c). */
 START_TEST(last_looks_wait_as_answered_steps) {
         lss_slave_faults f = faults_latency(1000, 300);
         membus *b = bus_random(4, 43, 0, 0, &f);
@@ -659,8 +660,7 @@ START_TEST(last_looks_wait_as_answered_steps) {
         ck_assert_uint_ge(p.gap[0], 20000);
         for (unsigned i = 1; i + 1 < p.n; i++)
                 ck_assert_msg(p.gap[i] < 10000, "look %u took %" PRIu64 " us", i, p.gap[i]);
-        ck_assert_uint_ge(p.gap[p.n - 1], 60000);
-        ck_assert_uint_lt(p.gap[p.n - 1], 90000);
+        ck_assert_uint_ge(p.gap[p.n - 1], LSS_VERDICT_WAIT_FLOOR_US);
         lss_master_free(m);
         membus_free(b);
 }
