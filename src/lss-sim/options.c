@@ -57,8 +57,10 @@ int sim_parse_u32(const char *s, uint32_t *ret) {
         return 0;
 }
 
-int sim_parse_ms(const char *s, uint32_t *ret_us) {
-        uint64_t us = 0;
+/* A decimal with up to `places` decimals, scaled by 10^places; at most
+ * UINT32_MAX. */
+static int parse_fixed(const char *s, unsigned places, uint32_t *ret) {
+        uint64_t v = 0;
         unsigned decimals = 0;
         bool dot = false, digits = false;
 
@@ -71,20 +73,35 @@ int sim_parse_ms(const char *s, uint32_t *ret_us) {
                 }
                 if (*s < '0' || *s > '9')
                         return -EINVAL;
-                if (dot && ++decimals > 3)
+                if (dot && ++decimals > places)
                         return -EINVAL;
                 digits = true;
-                us = us * 10 + (uint64_t) (*s - '0');
-                if (us > UINT32_MAX)
+                v = v * 10 + (uint64_t) (*s - '0');
+                if (v > UINT32_MAX)
                         return -ERANGE;
         }
         if (!digits)
                 return -EINVAL;
-        for (; decimals < 3; decimals++)
-                us *= 10;
-        if (us > UINT32_MAX)
+        for (; decimals < places; decimals++)
+                v *= 10;
+        if (v > UINT32_MAX)
                 return -ERANGE;
-        *ret_us = (uint32_t) us;
+        *ret = (uint32_t) v;
+        return 0;
+}
+
+int sim_parse_ms(const char *s, uint32_t *ret_us) {
+        return parse_fixed(s, 3, ret_us);
+}
+
+int sim_parse_probability(const char *s, uint32_t *ret_ppm) {
+        uint32_t v;
+        int r = parse_fixed(s, 6, &v);
+        if (r < 0)
+                return r;
+        if (v > 1000000u)
+                return -ERANGE;
+        *ret_ppm = v;
         return 0;
 }
 
@@ -156,7 +173,7 @@ int sim_parse_slave(const char *s, sim_slave_spec *ret, const char **what) {
 
 static const struct {
         const char *name;
-        enum { VAL_BOOL, VAL_CS, VAL_EARLY, VAL_INDEXES, VAL_MS } type;
+        enum { VAL_BOOL, VAL_CS, VAL_EARLY, VAL_INDEXES, VAL_MS, VAL_PROBABILITY } type;
 } knobs[_SIM_KNOB_MAX] = {
         [SIM_KNOB_SILENT] = { "silent", VAL_BOOL },
         [SIM_KNOB_IGNORE_CS] = { "ignore-cs", VAL_CS },
@@ -177,6 +194,7 @@ static const struct {
         [SIM_KNOB_FASTSCAN_ANY] = { "fastscan-any", VAL_BOOL },
         [SIM_KNOB_LATENCY] = { "latency", VAL_MS },
         [SIM_KNOB_JITTER] = { "jitter", VAL_MS },
+        [SIM_KNOB_DROP] = { "drop", VAL_PROBABILITY },
 };
 
 const char *sim_knob_name(enum sim_knob k) {
@@ -290,6 +308,12 @@ int sim_parse_fault(const char *s, sim_fault_spec *ret, const char **what) {
                         return -EINVAL;
                 }
                 break;
+        case VAL_PROBABILITY:
+                if (sim_parse_probability(value, &spec.value) < 0) {
+                        *what = "needs a probability 0..1 (e.g. =0.02)";
+                        return -EINVAL;
+                }
+                break;
         }
         *ret = spec;
         return 0;
@@ -321,6 +345,9 @@ void sim_fault_apply(const sim_fault_spec *spec, lss_slave_faults *f) {
         case SIM_KNOB_CONFIGURE_ERROR_SPECIFIC: f->configure_error_specific = on; break;
         case SIM_KNOB_LATENCY: f->latency_us = spec->value; break;
         case SIM_KNOB_JITTER: f->jitter_us = spec->value; break;
+        /* a frame lost on the way in (a receive FIFO overrun) or out (a full
+         * transmit queue): the master sees the same either way */
+        case SIM_KNOB_DROP: f->rx_loss_ppm = f->tx_loss_ppm = spec->value; break;
         case _SIM_KNOB_MAX: break;
         }
 }
@@ -338,7 +365,7 @@ static void help(FILE *out) {
                 "                             or 0xFF for non-configured (profile default)\n"
                 "  --random N                 add N slaves with made-up identities (distinct\n"
                 "                             serials; vendor/product from the profile if fixed)\n"
-                "  --seed S                   seed of --random and of the jitter (default 1)\n"
+                "  --seed S                   seed of --random, the jitter and drop (default 1)\n"
                 "  --profile NAME             device behaviour (default %s)\n"
                 "  --latency MS               answer latency of every slave (e.g. 2 or 0.3)\n"
                 "  --jitter MS                plus a random 0..MS on every answer\n"
@@ -369,7 +396,8 @@ static void help(FILE *out) {
                 "  needs-nmt-stopped, no-identify, bit-timing-silent,\n"
                 "  bit-index-unsupported=I[,I...]|none, miss-activation, duplicate-answers,\n"
                 "  configure-error-specific, canopennode-lss, lely-lss, fastscan-any,\n"
-                "  latency=MS, jitter=MS\n\n"
+                "  latency=MS, jitter=MS, drop=P (each frame received and each answer\n"
+                "  lost with probability P, 0..1)\n\n"
                 "State files: DIR/<serial as 8 lower-case hex digits>.state (an upper-case\n"
                 "name is read too), key=value lines: vendor, product, revision, serial\n"
                 "(0x + 8 hex digits), active_node_id, pending_node_id, stored_node_id,\n"

@@ -39,6 +39,7 @@ enum sim_knob {
         SIM_KNOB_FASTSCAN_ANY,
         SIM_KNOB_LATENCY,
         SIM_KNOB_JITTER,
+        SIM_KNOB_DROP,
         _SIM_KNOB_MAX,
 };
 
@@ -46,7 +47,7 @@ enum sim_knob {
 typedef struct sim_fault_spec {
         const char *arg;          /* the argument as given, for messages */
         enum sim_knob knob;
-        uint32_t value;           /* bool 0/1, cs (or -1 as UINT32_MAX), enum, bitmask, µs */
+        uint32_t value;           /* bool 0/1, cs (or -1 as UINT32_MAX), enum, bitmask, µs, ppm */
         bool clear;               /* bit-index-unsupported=none */
         bool has_serial;
         uint32_t serial;
@@ -86,6 +87,9 @@ int sim_parse_u64(const char *s, uint64_t *ret);
 int sim_parse_u32(const char *s, uint32_t *ret);
 /* Milliseconds, optionally with up to three decimals ("2.5"), to µs. */
 int sim_parse_ms(const char *s, uint32_t *ret_us);
+/* A probability 0..1 with up to six decimals ("0.02", "1"), to parts per
+ * million. */
+int sim_parse_probability(const char *s, uint32_t *ret_ppm);
 /* 1..127 or 0xFF */
 int sim_parse_node_id(const char *s, uint8_t *ret);
 /* VENDOR:PRODUCT:REVISION:SERIAL[:NODEID]; on failure *what says what was expected

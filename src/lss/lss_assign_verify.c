@@ -53,7 +53,11 @@ out:;
 int proc_assign_unverified(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->vpc);
         s->patient = false;
-        /* in effect, its boot-up lost: it answers SDO at N */
+        /* The switch to waiting that makes N take effect has no answer: a
+         * device that lost it is still in configuration, where it answers
+         * no selective switch. Once more; then, in effect (its boot-up
+         * lost, or it just took N), it answers SDO at N. */
+        SEND(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
         step_node_in_use(m, s->node_id);
         PT_YIELD(&s->vpc);
         if (m->step.n_answers > 0)

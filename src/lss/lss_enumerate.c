@@ -705,9 +705,12 @@ static bool stalls_seen(const lss_master *m) {
 }
 
 /* The looks for anybody left after a silent ping: one on a bus where
- * nobody answered yet (an empty bus costs), else cfg.retries more. */
+ * nobody answered yet (an empty bus costs), else cfg.retries more; more
+ * when the operation lost frames, so that a slave whose ping or answer is
+ * lost each time is improbable (lss_loss.h). */
 static unsigned last_look(const lss_master *m, const lss_scan_state *s) {
-        return finds_of(s) > 0 || s->pinged ? m->timing.cfg.retries : 0;
+        unsigned base = finds_of(s) > 0 || s->pinged ? m->timing.cfg.retries + 1u : 1u;
+        return lss_loss_asks(&m->loss, 1, base) - 1u;
 }
 
 int proc_enumerate(lss_master *m, lss_scan_state *s) {
@@ -806,6 +809,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 PT_CALL(&s->pc, reselect_kept(m, s));
                                 continue;
                         }
+                        if (s->looks > 0) /* a silent ping was wrong: lost, or somebody uncounted */
+                                lss_loss_answered(&m->loss, s->looks, 1);
                         s->looks = 0;
                         if (!s->fs.found) {
                                 if (++s->failed_scans <= m->timing.cfg.retries)

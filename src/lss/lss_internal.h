@@ -2,6 +2,7 @@
 /* Engine internals shared by the procedure files. Not a public header. */
 #pragma once
 
+#include "lss/lss_loss.h"
 #include "lss/lss_master.h"
 #include "lss/lss_timing.h"
 
@@ -252,6 +253,7 @@ typedef struct lss_scan_state {
         unsigned gap_passes;    /* slowscan: times the ranges between the slaves found were asked again */
         size_t n_before_gaps;   /* slowscan: slaves found before the last of those */
         bool heard;             /* slowscan: some range answered */
+        bool gap_heard;         /* slowscan: a range between the slaves found answered in the last look */
         /* slowscan: stack of intervals still to query */
         lss_range_item *stack, cur;
         size_t n_stack, cap_stack;
@@ -328,6 +330,7 @@ struct lss_master {
         lss_device *devices;
         size_t n_devices, cap_devices;
         lss_master_stats stats;
+        lss_loss loss;            /* of the running operation (start_op) */
         lss_taken_fn taken_fn;    /* lss_master_set_taken_check() */
         void *taken_ud;
         lss_progress_fn progress;
@@ -389,6 +392,7 @@ bool step_conflict(const lss_master *m);
  * a lost frame or a slow slave costs one timeout, not the procedure. The
  * attempt after a silent one may get that one's late answer: it counts (the
  * same request), its latency is no sample when it is early (lss_step.early).
+ * Answered, its silent attempts are the operation's loss (lss_loss.h).
  * `attempt` must be a field of the procedure's state. */
 #define STEP_RETRIED(m, pc, attempt, start_stmt) STEP_RETRIED_UP_TO(m, pc, attempt, (m)->timing.cfg.retries, start_stmt)
 #define STEP_RETRIED_UP_TO(m, pc, attempt, most, start_stmt) \
@@ -396,7 +400,11 @@ bool step_conflict(const lss_master *m);
                 start_stmt; \
                 (m)->step.watch_early = (attempt) > 0; \
                 PT_YIELD(pc); \
-                if (step_answered(m) || (attempt) >= (most)) \
+                if (step_answered(m)) { \
+                        lss_loss_answered(&(m)->loss, (attempt), (m)->step.n_tx); \
+                        break; \
+                } \
+                if ((attempt) >= (most)) \
                         break; \
                 (m)->stats.retries++; \
         }

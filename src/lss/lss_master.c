@@ -274,6 +274,7 @@ static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t no
         m->prog_base = 0;
         m->prog_span = 1;
         m->stats.patience_us = m->timing.patience_us;
+        m->loss = (lss_loss) { 0 };
         advance(m);
         return 0;
 }
@@ -858,6 +859,8 @@ void lss_master_on_tx_confirmed(lss_master *m, uint64_t at) {
 
 void lss_master_on_rx_lost(lss_master *m, uint64_t now) {
         (void) now;
+        if (m->running)
+                lss_loss_rx_lost(&m->loss);
         if (m->running && m->step.phase != PHASE_IDLE && m->step.phase != PHASE_DONE)
                 m->step.void_ = true;
 }

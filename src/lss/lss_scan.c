@@ -182,6 +182,12 @@ static int push_gaps(lss_scan_state *s) {
         return 0;
 }
 
+/* How often a gap between the slaves found is asked before its silence
+ * ends the scan (lss_loss.h). */
+static unsigned gap_asks(const lss_master *m) {
+        return lss_loss_asks(&m->loss, m->step.n_tx, m->timing.cfg.retries + 1u);
+}
+
 int proc_slowscan(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->n_cand = s->n_stack = 0;
@@ -193,6 +199,7 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
                 goto oom;
         s->i = 0;
         s->gap_passes = 0;
+        s->gap_heard = false;
         s->heard = false;
 again:
         while (s->n_stack > 0) {
@@ -202,8 +209,9 @@ again:
                 PT_YIELD(&s->pc);
                 if (!step_answered(m) && (s->cur.gap || s->cur.confirm)) {
                         /* silent twice like any half (a gap 1 + retries
-                         * times: it is the last look): nobody there */
-                        if (++s->cur.asks < (s->cur.gap ? m->timing.cfg.retries + 1 : 2))
+                         * times, more when the scan lost frames: it is the
+                         * last look): nobody there */
+                        if (++s->cur.asks < (s->cur.gap ? gap_asks(m) : 2))
                                 s->stack[s->n_stack++] = s->cur;
                         continue;
                 }
@@ -237,6 +245,7 @@ again:
                         continue;
                 }
                 s->heard = true;
+                s->gap_heard = s->gap_heard || s->cur.gap;
                 if (s->cur.rlo == s->cur.rhi && s->cur.slo == s->cur.shi) {
                         lss_identity id = { s->range.vendor, s->range.product, s->cur.rlo, s->cur.slo };
                         if (cand_add(s, &id) < 0)
@@ -251,14 +260,17 @@ again:
                         goto oom;
         }
         if ((s->n_cand > 0 || s->heard) && m->result.status == LSS_OK && !m->cancelling &&
-            (s->gap_passes == 0 || (s->n_cand > s->n_before_gaps && s->gap_passes <= m->timing.cfg.retries))) {
+            (s->gap_passes == 0 || ((s->n_cand > s->n_before_gaps || s->gap_heard) &&
+                                    s->gap_passes <= m->timing.cfg.retries))) {
                 /* A silent half is asked twice: a slave that lost both while
                  * the other half answered would be missed, and the scan say
                  * OK. Everything between the slaves found is asked again
                  * (one step per gap, a few per slave), and again while that
-                 * finds somebody. */
+                 * finds somebody or is answered: a slave that answered a gap
+                 * and was lost again on the way down is still there. */
                 s->gap_passes++;
                 s->n_before_gaps = s->n_cand;
+                s->gap_heard = false;
                 if (push_gaps(s) < 0)
                         goto oom;
                 goto again;
@@ -269,6 +281,13 @@ again:
                  * verified had only its own: once more, so that one frame it
                  * lost does not leave it in configuration. */
                 STEP_REQUEST(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
+        }
+        if (s->gap_heard && s->n_cand == s->n_before_gaps && s->unresolved == 0 && s->dropped == 0 &&
+            m->result.status == LSS_OK) {
+                /* the last look was answered, and nobody singled out */
+                master_fail(m, LSS_E_INCOMPLETE, "a range between the slaves found answered identify %u times but "
+                            "no slave in it was singled out (answers lost, or not CiA 305)", s->gap_passes);
+                goto out;
         }
         if (s->unresolved > 0) {
                 if (s->dropped > 0)

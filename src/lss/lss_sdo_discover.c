@@ -16,7 +16,9 @@
  *   - A request nobody answers at first contact (sub-index 1) is sent once
  *     more, then the node-ID is silent (nobody there, or a device in NMT
  *     Stopped); a device that answered is asked 1 + cfg.retries times for
- *     each further field before it stays unknown.
+ *     each further field before it stays unknown. When the pass lost
+ *     frames, the silent node-IDs are asked again at the end, as often as
+ *     that loss calls for (lss_loss.h).
  *   - Identical answers count once; a second, different answer to one
  *     request is two devices at one node-ID: a conflict, never one device.
  *   - An abort means a device is there without that field; 0x06020000
@@ -58,6 +60,7 @@ typedef struct sdo_slot {
         uint8_t state;                    /* enum slot_state */
         uint8_t sub;                      /* 1018h sub-index asked now, 1..SUBS */
         uint8_t tries;                    /* requests for it so far */
+        uint8_t contacts;                 /* requests for sub-index 1 in all */
         bool queued;                      /* handed out in this round: its write time comes with on_sent */
         bool silent;                      /* sub-index 1 was given up: nobody answered */
         uint64_t sent_at, wire_at, deadline;
@@ -141,6 +144,7 @@ static bool send_request(lss_master *m, lss_sdo_state *s, uint8_t node) {
         else
                 sl->asked_twice |= (uint8_t) (1u << sl->sub);
         sl->tries++;
+        sl->contacts += sl->sub == 1;
         sl->queued = true;
         sl->state = SLOT_BUSY;
         m->stats.steps++;
@@ -211,6 +215,7 @@ static void take_answer(lss_master *m, lss_sdo_state *s, uint8_t node, uint8_t s
                 uint32_t latency = rx > sl->wire_at ? (uint32_t) (rx - sl->wire_at) : 0;
                 lss_timing_add_sample(&s->timing, latency);
                 lss_timing_on_answer(&s->timing, latency, false);
+                lss_loss_answered(&m->loss, sl->tries - 1u, 1);
                 slot_next(m, s, sl);
                 return;
         }
@@ -340,6 +345,29 @@ static void build_result(lss_master *m, lss_sdo_state *s) {
         m->result.n_sdo_nodes = k;
 }
 
+/* Node-IDs given up as silent while the pass lost frames are asked again,
+ * until each was asked as often as the loss calls for (lss_loss.h): the
+ * answers of a device at one may have been lost every time. Through the
+ * window, as at first. Whether any was. */
+static bool reopen_silent(lss_master *m, lss_sdo_state *s) {
+        unsigned asks = lss_loss_asks(&m->loss, 1, FIRST_TRIES);
+        bool any = false;
+        for (unsigned n = s->first; n <= s->last; n++) {
+                sdo_slot *sl = &s->slot[n];
+                if (sl->state != SLOT_DONE || !sl->silent || sl->contacts >= asks)
+                        continue;
+                sl->silent = false;
+                sl->state = SLOT_IDLE;
+                s->done--;
+                any = true;
+        }
+        if (any) {
+                s->next = s->first;
+                m->stats.retries++;
+        }
+        return any;
+}
+
 int proc_sdo_discover(lss_master *m) {
         lss_sdo_state *s = m->sdo;
 
@@ -357,6 +385,8 @@ int proc_sdo_discover(lss_master *m) {
                         else
                                 on_time(m, s);
                 }
+                if (reopen_silent(m, s))
+                        continue;
                 /* a second, slower device's answer to the last requests, and
                  * late ones, may still come: the full wait */
                 s->guard_end = m->now + lss_timing_wait(&s->timing, LSS_WAIT_DISCOVERY) +

@@ -306,6 +306,11 @@ START_TEST(options_errors) {
         USAGE_ERROR("--fault 'silent=maybe'", "vcan0", "--fault", "silent=maybe");
         USAGE_ERROR("--fault 'silent@x'", "vcan0", "--fault", "silent@x");
         USAGE_ERROR("--fault 'bit-index-unsupported=32'", "vcan0", "--fault", "bit-index-unsupported=32");
+        USAGE_ERROR("--fault 'drop'", "vcan0", "--fault", "drop");
+        USAGE_ERROR("--fault 'drop=1.5'", "vcan0", "--fault", "drop=1.5");
+        USAGE_ERROR("--fault 'drop=2%'", "vcan0", "--fault", "drop=2%");
+        USAGE_ERROR("--fault 'drop=0.0000001'", "vcan0", "--fault", "drop=0.0000001");
+        USAGE_ERROR("--fault 'drop=.'", "vcan0", "--fault", "drop=.");
         USAGE_ERROR("--state", "vcan0", "--state", "");
         USAGE_ERROR("missing IFACE", "--slave", "1:2:3:4");
         USAGE_ERROR("'vcan1'", "vcan0", "vcan1");
@@ -396,6 +401,16 @@ START_TEST(fault_knobs) {
         ck_assert_uint_eq(f.latency_us, 12500);
         apply(&f, "jitter=3");
         ck_assert_uint_eq(f.jitter_us, 3000);
+        /* drop=P: both ways, in parts per million */
+        apply(&f, "drop=0.02");
+        ck_assert_uint_eq(f.rx_loss_ppm, 20000);
+        ck_assert_uint_eq(f.tx_loss_ppm, 20000);
+        apply(&f, "drop=1");
+        ck_assert_uint_eq(f.rx_loss_ppm, 1000000);
+        apply(&f, "drop=0.000001");
+        ck_assert_uint_eq(f.tx_loss_ppm, 1);
+        apply(&f, "drop=0");
+        ck_assert_uint_eq(f.rx_loss_ppm + f.tx_loss_ppm, 0);
 
         sim_fault_spec spec;
         const char *what;
