@@ -81,6 +81,7 @@ struct lssd_job {
         size_t n_sdo_cand;
         uint64_t part_started;       /* when the running stage began (the transport's clock, µs) */
         uint64_t part_us[_LSSD_SCAN_PARTS]; /* how long each part took so far */
+        unsigned expected_finds;     /* non-configured devices seen before (0: not known), for Progress */
         lss_identity *announced;     /* DeviceFound sent (when the engine confirmed them) */
         size_t n_announced;
         bool scan_incomplete;        /* a stage failed: devices not found are not "missing" */

@@ -36,6 +36,8 @@ int lssd_run_bitrate(lssd_job_env *e, lssd_job *j, const lss_result *r);
 unsigned lssd_discover_n_stages(const lssd_job *j);
 unsigned lssd_discover_sdo_stage(const lssd_job *j);
 unsigned lssd_discover_confirm_stage(const lssd_job *j);
+/* The part of a Scan (LSSD_SCAN_PART_*) stage j->stage belongs to. */
+unsigned lssd_discover_part(const lssd_job *j);
 /* Starts stage j->stage. Negative errno on failure. */
 int lssd_discover_start(lssd_job_env *e, const lssd_job *j);
 /* Stage j->stage ended with r: its devices join j->found (SDO's complete
@@ -52,11 +54,13 @@ bool lssd_discover_more(const lssd_job *j);
 int lssd_scan_take_sdo(lssd_job_env *e, lssd_job *j, const lss_result *r);
 
 /* A Scan's progress 0..1 while its stage j->stage is at p: stages weighted
- * by how long the parts of the last Scan with SDO took, equal before. */
+ * by the time they take (lssd_scan_progress.c). */
 double lssd_scan_progress(const lssd_job_env *e, const lssd_job *j, double p);
 
-/* Tells the engine how many devices an enumeration will likely find: the
- * non-configured devices seen before (for its progress). */
+/* How many devices an enumeration will likely find: the non-configured
+ * devices seen before; 0 when none (or not known). */
+unsigned lssd_run_expected_finds(const lssd_job_env *e);
+/* Tells the engine that count (for its progress). */
 void lssd_run_expect_finds(lssd_job_env *e);
 
 /* The engine confirmed a device during a scan job's stage

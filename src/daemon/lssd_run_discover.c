@@ -20,14 +20,22 @@ unsigned lssd_discover_n_stages(const lssd_job *j) {
         return (unsigned) j->n_pairs + 1 + (j->scan_sdo ? 2 : 0);
 }
 
+unsigned lssd_discover_part(const lssd_job *j) {
+        unsigned sdo = lssd_discover_sdo_stage(j);
+        return j->stage < sdo ? LSSD_SCAN_PART_LSS : j->stage == sdo ? LSSD_SCAN_PART_SDO : LSSD_SCAN_PART_CONFIRM;
+}
+
 /* What an enumeration will likely find: the non-configured devices seen
- * before (the first scan of a bus cannot know: its progress assumes as many
- * again as found so far). */
-void lssd_run_expect_finds(lssd_job_env *e) {
+ * before (the first scan of a bus cannot know). */
+unsigned lssd_run_expected_finds(const lssd_job_env *e) {
         unsigned n = 0;
         for (const lssd_device *d = e->devices->head; d; d = d->next)
                 n += !d->missing && d->node_id == LSS_NODE_ID_UNCONFIGURED;
-        lss_master_set_expected_finds(e->engine, n);
+        return n;
+}
+
+void lssd_run_expect_finds(lssd_job_env *e) {
+        lss_master_set_expected_finds(e->engine, lssd_run_expected_finds(e));
 }
 
 int lssd_discover_start(lssd_job_env *e, const lssd_job *j) {

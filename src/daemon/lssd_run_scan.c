@@ -18,30 +18,11 @@ static int scan_start_stage(lssd_job_env *e, lssd_job *j) {
         return k < 0 ? lssd_job_start_failed(e, j, k) : 1;
 }
 
-static unsigned scan_part(const lssd_job *j) {
-        unsigned sdo = lssd_discover_sdo_stage(j);
-        return j->stage < sdo ? LSSD_SCAN_PART_LSS : j->stage == sdo ? LSSD_SCAN_PART_SDO : LSSD_SCAN_PART_CONFIRM;
-}
-
 /* The stage ended (or the job): its time counts for its part. */
 static void scan_part_end(lssd_job_env *e, lssd_job *j) {
         uint64_t now = lssd_job_env_now(e);
-        j->part_us[scan_part(j)] += now - j->part_started;
+        j->part_us[lssd_discover_part(j)] += now - j->part_started;
         j->part_started = now;
-}
-
-double lssd_scan_progress(const lssd_job_env *e, const lssd_job *j, double p) {
-        const uint64_t *w = e->scan_part_us;
-        double total = (double) w[LSSD_SCAN_PART_LSS] + (double) w[LSSD_SCAN_PART_SDO] +
-                       (double) w[LSSD_SCAN_PART_CONFIRM];
-        if (!j->scan_sdo || total <= 0)
-                return ((double) j->stage + p) / (double) j->n_stages;
-        unsigned part = scan_part(j);
-        double within = part == LSSD_SCAN_PART_LSS ? ((double) j->stage + p) / (double) (j->n_pairs + 1) : p;
-        double before = 0;
-        for (unsigned k = 0; k < part; k++)
-                before += (double) w[k];
-        return (before + within * (double) w[part]) / total;
 }
 
 static int compare_devices(const void *a, const void *b) {
@@ -267,6 +248,7 @@ static int fill_scan(sd_bus_message *reply, const void *userdata) {
 int lssd_run_scan(lssd_job_env *e, lssd_job *j, const lss_result *r) {
         if (!r) {
                 j->n_stages = lssd_discover_n_stages(j);
+                j->expected_finds = lssd_run_expected_finds(e);
                 j->part_started = lssd_job_env_now(e);
                 return scan_start_stage(e, j);
         }
