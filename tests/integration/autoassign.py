@@ -483,7 +483,7 @@ def test_ready_limit():
                'journal: Ready:, then the result of the pass:\n' + out)
         expect_eq(out.count('Ready: '), 1, '"Ready:" lines in the journal')
         last = env.get(B0, BUS_IFACE, 'LastPass')
-        expect_eq((last[2], last[3], last[4].get('assigned'), last[4].get('missing')), ('boot', 'partial', 2, 1),
+        expect_eq((last[2], last[3], last[4].get('assigned'), last[4].get('missing')), ('boot', 'partial', 2, 20),
                   'LastPass: %r' % (last,))
         for s, node in zip(present, (50, 51)):
             expect_eq(env.get(dev('vcan0', s), DEVICE_IFACE, 'NodeId'), node, 'NodeId of %x' % s.serial)

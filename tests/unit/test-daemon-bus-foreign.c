@@ -198,8 +198,16 @@ START_TEST(running_job_ends) {
         run_until_idle(&f, 30000000);
         const lssd_pass_record *p = &lssd_bus_job_env(f.bus)->last_pass;
         ck_assert_str_eq(p->result, "foreign-master");
+        /* A device whose Configure Node-ID had gone out when the request
+         * came fails and keeps that node-ID (its outcome says so): it may
+         * take it at the switch to waiting lssd sends last, a boot-up later.
+         * Before, this test read the slaves at once and wanted the pool's
+         * count alone: under load the request fell between Configure and
+         * the outcome in about 1 run of 5. */
+        run_for(&f, 100000);
         unsigned before = slaves_at(simbus_bus(sim), 71, 90);
-        ck_assert_uint_eq(p->counts[LSS_OUTCOME_POOL], before);
+        ck_assert_uint_le(p->counts[LSS_OUTCOME_POOL], before);
+        ck_assert_uint_le(before, p->counts[LSS_OUTCOME_POOL] + p->counts[LSS_OUTCOME_FAILED]);
         ck_assert_uint_lt(before, N_SLAVES);
         ck_assert(refused(&f, msg, sizeof(msg)));
 
