@@ -143,6 +143,8 @@ def main():
     dates = sorted({v.get('saved', '?')[:10] for v in res.values()})
     print('# results of %s; binaries built from %s' % (', '.join(dates), ', '.join(
         sorted({v.get('source', '?') for v in res.values()}))))
+    # what users run: no bench configuration sets a timing of its own
+    print('# lssd at its default timing (lss_timeout_ms 20, adaptive waits), as installed')
     allcases = {(v['impl'], v['mode'], v['n']): v for k, v in res.items() if k.startswith('autoaddress-')}
     failures = []
     medians = {}
