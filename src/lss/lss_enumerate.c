@@ -696,16 +696,28 @@ static int begin_patient_round(lss_master *m, lss_scan_state *s) {
         s->failed_scans = s->phantoms = s->n_other = 0;
         m->stats.rechecks++;
         master_patient_begin(m, lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US));
-        if (s->n_kept > 0 && !s->no_set_aside) {
-                /* a kept one may answer every request: its answers to the
-                 * set-aside check were held back */
-                s->xpc = 0;
-                PT_CALL(&s->bpc, reexamine_kept(m, s));
-                if (m->result.status != LSS_OK)
-                        goto out;
-        } else {
-                SEND(m, &s->bpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
-        }
+        SEND(m, &s->bpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+        s->rpc = 0;
+        PT_CALL(&s->bpc, reselect_kept(m, s));
+        if (s->n_kept == 0 || s->no_set_aside)
+                goto out;
+        /* A kept one may answer every request: its answers to the set-aside
+         * check were held back. One Fastscan request for a kept slave's
+         * serial, with all kept in configuration, is answered by such a
+         * slave alone (the kept CiA 305 slaves take no part; one in waiting
+         * at that field would have that slave's identity): asked patiently,
+         * it clears them all; answered, each is asked alone. */
+        for (s->x = 0; !kept(&s->cand[s->x]); s->x++)
+                ;
+        s->found = s->cand[s->x].id;
+        s->kpc = 0;
+        PT_CALL(&s->bpc, answers_in_configuration(m, s));
+        if (!s->bends)
+                goto out;
+        s->xpc = 0;
+        PT_CALL(&s->bpc, reexamine_kept(m, s));
+        if (m->result.status != LSS_OK)
+                goto out;
         s->rpc = 0;
         PT_CALL(&s->bpc, reselect_kept(m, s));
 out:;
