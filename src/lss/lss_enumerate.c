@@ -346,10 +346,16 @@ static int give_back(lss_master *m, lss_scan_state *s) {
                         if (s->gb_try > 0 && !back_due(s, &s->cand[s->i]))
                                 continue;
                         SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->i].id);
+                        /* a slave confirmed in this pass: silence is a stall,
+                         * likely (unverified, the whole pass is asked again) */
+                        AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->i].id));
                         if (!step_answered(m))
                                 continue;
                         REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                                         LSS_CS_INQUIRE_NODE_ID);
+                        AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->vpc, s->attempt,
+                                                                     lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                                                     LSS_CS_INQUIRE_NODE_ID));
                         if (step_answered(m) && !step_conflict(m)) {
                                 s->cand[s->i].node_id = m->step.answer.data[1];
                                 if (s->cand[s->i].aside_node_id &&

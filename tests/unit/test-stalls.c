@@ -94,12 +94,19 @@ static void scan_of(const member *mb, size_t n) {
                 ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
                 const lss_result *r = run(m, b);
                 no_false_verdict(mb, n, seed, r);
-                ck_assert_msg(r->status != LSS_OK || r->n_devices == unconfigured,
-                              "seed %u (%u ms stalls): OK with %zu of %zu found", (unsigned) seed,
-                              stall_us[seed % 4] / 1000, r->n_devices, unconfigured);
-                for (size_t i = 0; i < r->n_devices; i++)
-                        ck_assert_msg(member_of(mb, n, &r->devices[i].id), "seed %u: made-up %x found",
-                                      (unsigned) seed, r->devices[i].id.serial);
+                /* every non-configured slave found; a configured one found too
+                 * (a CANopenNode slave that answered Fastscan) with its node-ID */
+                size_t found_unconfigured = 0;
+                for (size_t i = 0; i < r->n_devices; i++) {
+                        const member *x = member_of(mb, n, &r->devices[i].id);
+                        ck_assert_msg(x, "seed %u: made-up %x found", (unsigned) seed, r->devices[i].id.serial);
+                        ck_assert_msg(r->devices[i].node_id == x->node_id, "seed %u: %x found at node-ID %u, has %u",
+                                      (unsigned) seed, x->id.serial, r->devices[i].node_id, x->node_id);
+                        found_unconfigured += x->node_id == 0xFF;
+                }
+                ck_assert_msg(r->status != LSS_OK || found_unconfigured == unconfigured,
+                              "seed %u (%u ms stalls): OK with %zu of %zu non-configured found", (unsigned) seed,
+                              stall_us[seed % 4] / 1000, found_unconfigured, unconfigured);
                 as_found(b, &bb, seed_name(name, sizeof(name), seed));
                 lss_master_free(m);
                 membus_free(b);
