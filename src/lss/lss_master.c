@@ -89,6 +89,7 @@ void lss_master_set_timing(lss_master *m, const lss_timing_config *cfg) {
         m->timing.n_samples = t.n_samples;
         m->timing.next = t.next;
         m->timing.patience_us = t.patience_us;
+        m->timing.stalled = t.stalled;
         m->patient = false; /* the new configuration holds at once */
 }
 

@@ -134,6 +134,8 @@ static void set_patience(lss_timing *t, uint64_t p) {
         uint64_t cap = lss_timing_patience_cap(t);
         t->patience_us = (uint32_t) (p < cap ? p : cap);
         t->calm = 0;
+        if (t->patience_us > t->cfg.timeout_us)
+                t->stalled = true;
 }
 
 void lss_timing_on_answer(lss_timing *t, uint32_t latency_us, bool late) {

@@ -55,6 +55,8 @@ typedef struct lss_timing {
         unsigned n_samples, next;
         uint32_t patience_us; /* the wait late answers called for; 0: none */
         unsigned calm;        /* answers in time since the patience last changed */
+        bool stalled;         /* the patience went beyond the timeout once: answers came
+                               * later than it allows (a host or bus that stalls) */
 } lss_timing;
 
 void lss_timing_init(lss_timing *t, const lss_timing_config *cfg);
