@@ -243,14 +243,28 @@ class Env:
                              stdout=self.dbus_log, stderr=subprocess.STDOUT)
         self.procs.append(p)
         self.dbus = p
-        for _ in range(200):
-            if os.path.exists(sock):
+        # the socket file appears at bind(), before listen(): a connect in
+        # between is refused (an ASan run of the CI met it), so wait until
+        # one is taken
+        for _ in range(500):
+            if os.path.exists(sock) and self._accepts(sock):
                 break
             if p.poll() is not None:
                 raise RuntimeError('dbus-daemon exited: ' + self.read(os.path.join(self.dir, 'dbus.log')))
             time.sleep(0.02)
         os.chmod(sock, 0o777)
         os.environ['DBUS_SYSTEM_BUS_ADDRESS'] = self.address
+
+    @staticmethod
+    def _accepts(path):
+        t = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        try:
+            t.connect(path)
+            return True
+        except OSError:
+            return False
+        finally:
+            t.close()
 
     def _start_candump(self):
         # bound to every CAN interface: a socket bound to one dies with its link (ENETDOWN)
