@@ -1036,7 +1036,9 @@ def test_errors():
     # the exit status each lssd error has in its one home is lssctl(1)'s
     for sym, (name, code) in ERRORS.items():
         expect_eq(code, EXIT.get(sym.lower().replace('_', '-')), 'exit status of %s in src/names/lssd_names.h' % name)
-    slaves = [Slave(0x9A, 3, 1, 0x1000 + i) for i in range(6)]
+    # enough slaves that a Scan outlasts lssctl's start at the default timing
+    # (6 were done in 1-2 s: the queue was no longer full when lssctl asked)
+    slaves = [Slave(0x9A, 3, 1, 0x1000 + i) for i in range(24)]
     with Env({'vcan0': slaves}, lssd_args=['--queue-size', '1']) as env:
         ctl = Ctl(env)
         # somebody else cancels lssctl's job
