@@ -737,12 +737,19 @@ static bool stalls_seen(const lss_master *m) {
         return m->timing.stalled;
 }
 
+/* A Scan about to say the bus is empty: a verdict nothing checks later. */
+static bool empty_scan(const lss_scan_state *s) {
+        return s->listen && finds_of(s) == 0 && !s->pinged;
+}
+
 /* The looks for anybody left after a silent ping: one on a bus where
- * nobody answered yet (an empty bus costs), else cfg.retries more; more
+ * nobody answered yet (an empty bus costs), two patient ones for a Scan's
+ * "nobody here" (as every verdict: a host stalled past one patient wait
+ * made it say "OK, 0 devices" on a bus of 8), else cfg.retries more; more
  * when the operation lost frames, so that a slave whose ping or answer is
  * lost each time is improbable (lss_loss.h). */
 static unsigned last_look(const lss_master *m, const lss_scan_state *s) {
-        unsigned base = finds_of(s) > 0 || s->pinged ? m->timing.cfg.retries + 1u : 1u;
+        unsigned base = finds_of(s) > 0 || s->pinged ? m->timing.cfg.retries + 1u : empty_scan(s) ? 2u : 1u;
         return lss_loss_asks(&m->loss, 1, base) - 1u;
 }
 
@@ -800,8 +807,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                          * stalled host holds back must still reach it (a slave's
                          * answers queue, so it holds back all of them), where
                          * nothing looks again for what it misses or this bus has
-                         * stalled before. */
-                        if (s->looks >= last_look(m, s) && (s->patient_end || stalls_seen(m)))
+                         * stalled before. Each look of an empty Scan is a last one. */
+                        if ((s->looks >= last_look(m, s) || empty_scan(s)) && (s->patient_end || stalls_seen(m)))
                                 s->fs.ping_late_us = lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US);
                         if (finds_of(s) > 0) {
                                 /* vendor, product and revision of the last find: likely those of the next */

@@ -315,6 +315,13 @@ static bool fastscan_takes_part(const lss_slave *s) {
         return !s->faults.canopennode_lss || s->st.pending_node_id == LSS_NODE_ID_UNCONFIGURED;
 }
 
+/* The late_fs fault: this answer, and those queued behind it, late. */
+static void late_fastscan_answer(lss_slave *s, uint8_t bitcheck, uint8_t sub) {
+        if (s->faults.late_fs_us > 0 && bitcheck == s->faults.late_fs_check && sub == s->faults.late_fs_sub &&
+            ++s->late_fs_seen == s->faults.late_fs_nth)
+                s->tx_ready_us = s->now_us + tx_delay(s) + s->faults.late_fs_us;
+}
+
 static void fastscan(lss_slave *s, const lss_frame *f) {
         uint32_t idnumber = lss_get_u32(f->data + 1);
         uint8_t bitcheck = f->data[5], sub = f->data[6], next = f->data[7];
@@ -340,6 +347,7 @@ static void fastscan(lss_slave *s, const lss_frame *f) {
                 return;
         if (bitcheck == LSS_FASTSCAN_PING) {
                 s->fs_sub = LSS_FIELD_VENDOR;
+                late_fastscan_answer(s, bitcheck, sub);
                 answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
                 return;
         }
@@ -355,9 +363,7 @@ static void fastscan(lss_slave *s, const lss_frame *f) {
                 s->late_found_sent = true;
                 s->tx_ready_us = s->now_us + tx_delay(s) + s->faults.late_found_us;
         }
-        if (s->faults.late_fs_us > 0 && bitcheck == s->faults.late_fs_check && sub == s->faults.late_fs_sub &&
-            ++s->late_fs_seen == s->faults.late_fs_nth)
-                s->tx_ready_us = s->now_us + tx_delay(s) + s->faults.late_fs_us;
+        late_fastscan_answer(s, bitcheck, sub);
         answer_cs(s, LSS_CS_IDENTIFY_SLAVE, 0, 0);
         /* lely moves to lssnext at every step, not at the field's last only */
         if (bitcheck != 0 && !s->faults.lely_lss)

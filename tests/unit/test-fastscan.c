@@ -687,6 +687,28 @@ START_TEST(looks_again_after_an_answered_ping) {
 }
 END_TEST
 
+/* A host stalled right at the Scan's start (engine-vcan-link-down in CI:
+ * "OK", 0 devices, on a bus of 8): every slave's answers wait 300 ms behind
+ * the first ping's, longer than the one patient look an empty bus got
+ * (lss-sim's late_fs fault on the ping; now two patient looks). */
+START_TEST(empty_bus_looked_at_twice) {
+        lss_slave_faults f = faults_latency(1000, 0);
+        f.late_fs_us = 300000;
+        f.late_fs_check = 0x80;
+        f.late_fs_sub = LSS_FIELD_VENDOR;
+        f.late_fs_nth = 1;
+        membus *b = bus_random(8, 45, 0, 0, &f);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->n_devices, 8);
+        assert_devices_real(b, r);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* Configured slaves are not found by fastscan, unless they deviate. */
 START_TEST(enumerate_skips_configured) {
         membus *b = bus_random(3, 21, 0, 0, NULL);
@@ -964,6 +986,7 @@ int main(void) {
         tcase_add_test(tc, late_bit_answer_asked_again);
         tcase_add_test(tc, misread_bit_found_by_prefix_search);
         tcase_add_test(tc, looks_again_after_an_answered_ping);
+        tcase_add_test(tc, empty_bus_looked_at_twice);
         tcase_add_test(tc, late_bit_answer_in_the_first_steps_asked_again);
         tcase_add_test(tc, late_last_bit_answer_asked_again);
         tcase_add_test(tc, late_confirmation_taken);
