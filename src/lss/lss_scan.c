@@ -126,8 +126,11 @@ static int verify_candidate(lss_master *m, lss_scan_state *s) {
                         master_found(m, &c->id, c->node_id, 0);
         } else
                 drop(s);
+out:
+        /* also after a silent selective switch: a slave that took it and
+         * whose answers were lost is in configuration, and may be the last
+         * one selected (a scan that ends OK sends no switch after it) */
         STEP_REQUEST(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING), -1);
-out:;
         PT_END(&s->vpc);
 }
 

@@ -6,7 +6,9 @@
  * node-ID (and bit timing) it had, but what the pass did and verified, and
  * the next operation succeeds. Each verdict is provoked by the slave
  * model's faults on a mixed bus: CiA 305 slaves configured and not,
- * CANopenNode v4 slaves configured and not. */
+ * CANopenNode v4 slaves configured and not (the enumeration's deadline by
+ * a host that stalls past it; "no free node-ID" on a bus of 128). Not
+ * provoked: out of memory (the engine calls realloc directly, no hook). */
 #include <check.h>
 #include <stdio.h>
 #include <string.h>
@@ -53,6 +55,28 @@ static void next_enumeration_ok(membus *b, const char *what) {
         lss_master_free(m);
 }
 
+/* An enumeration on `b` (driven with `hook` for at most `limit_us`) that
+ * must end with `status` and a message containing `verdict`, the bus as
+ * found. Returns the master, for the caller to free after the next one. */
+static lss_master *enumeration_ends(membus *b, enum lss_status status, const char *verdict, lss_drive_hook hook,
+                                    void *ud, uint64_t limit_us) {
+        bus_before bb;
+        before_take(&bb, b);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = lss_drive(m, b, limit_us, hook, ud);
+        ck_assert_msg(r->status == status && strstr(r->message, verdict), "%s", r->message);
+        as_found(b, &bb, r->message);
+        return m;
+}
+
+/* The end of a case: the next enumeration succeeds; frees both. */
+static void next_ok_free(lss_master *m, membus *b, const char *what) {
+        next_enumeration_ok(b, what);
+        lss_master_free(m);
+        membus_free(b);
+}
+
 /* A fault switched on for one slave when a master frame is on the wire
  * (before any slave acts on it), off again once the pass gave its verdict. */
 typedef struct fault_at {
@@ -61,6 +85,7 @@ typedef struct fault_at {
         uint8_t cs;           /* the master's request that starts it */
         bool aside_only;      /* only Configure Node-ID of a temporary node-ID (100..127) */
         bool while_selected;  /* only while the slave is in configuration */
+        bool own;             /* only a request that carries the slave's serial */
         bool on;
 } fault_at;
 
@@ -69,7 +94,8 @@ static void fault_at_trace(void *ud, const lss_frame *f, uint64_t t_us) {
         lss_slave *s = membus_slave(fa->bus, fa->slave);
         (void) t_us;
         if (f->id != 0x7E5 || f->data[0] != fa->cs || (fa->while_selected && !s->st.configuration) ||
-            (fa->aside_only && (f->data[1] < 100 || f->data[1] > LSS_NODE_ID_MAX)))
+            (fa->aside_only && (f->data[1] < 100 || f->data[1] > LSS_NODE_ID_MAX)) ||
+            (fa->own && lss_get_u32(f->data + 1) != s->id.serial))
                 return;
         fa->on = true;
         s->faults.tx_loss_ppm = 1000000; /* its answers never leave it */
@@ -213,6 +239,128 @@ START_TEST(enumeration_temporary_kept) {
 }
 END_TEST
 
+/* The host stalls (a VM paused, a laptop suspended) longer than the
+ * enumeration's deadline right after the CANopenNode slave was set aside:
+ * the next round stops at the deadline, the slave gets 255 back. */
+typedef struct stall_at {
+        fault_at fa;        /* only its trigger: Configure Node-ID of a temporary node-ID */
+        bool stalled;
+} stall_at;
+
+static void stall_trace(void *ud, const lss_frame *f, uint64_t t_us) {
+        stall_at *st = ud;
+        (void) t_us;
+        if (f->id == 0x7E5 && f->data[0] == LSS_CS_CONFIGURE_NODE_ID && f->data[1] >= 100 &&
+            f->data[1] <= LSS_NODE_ID_MAX)
+                st->fa.on = true;
+}
+
+static void stall_hook(void *ud, membus *b, lss_master *m) {
+        stall_at *st = ud;
+        lss_timing_config c;
+        (void) m;
+        if (!st->fa.on || st->stalled)
+                return;
+        st->stalled = true;
+        lss_timing_config_default(&c);
+        membus_advance(b, membus_now(b) + lss_enumerate_deadline_us(&c));
+}
+
+START_TEST(enumeration_deadline) {
+        membus *b = mixed_bus(1);
+        stall_at st = { .fa = { .bus = b } };
+        lss_timing_config c;
+        lss_timing_config_default(&c);
+        membus_set_trace(b, stall_trace, &st);
+        lss_master *m = enumeration_ends(b, LSS_E_INCOMPLETE, "stopped at its deadline", stall_hook, &st,
+                                         lss_enumerate_deadline_us(&c) + 600 * SECOND);
+        ck_assert(st.stalled);
+        membus_set_trace(b, NULL, NULL);
+        next_ok_free(m, b, "after the deadline");
+}
+END_TEST
+
+/* Twins of one identity, one non-configured, one at node-ID 21 that takes
+ * part in Fastscan anyway, found after the CANopenNode slave was set aside
+ * (no slave kept in configuration: confirmed by inquiry): both confirm the
+ * identity, but Inquire Node-ID has two different answers each round
+ * ("could not be confirmed: several slaves answered"). The CANopenNode
+ * slave gets 255 back. Healed by taking the twin off the bus. */
+START_TEST(enumeration_not_confirmed) {
+        static const lss_identity twin = { 0x66, 0x6, 0x1, 0x6601 };
+        membus *b = mixed_bus(1);
+        lss_slave_faults f = faults_latency(1000, 300);
+        /* the CiA 305 slaves found before the CANopenNode one would be kept
+         * in configuration, and the twins then confirmed by identify alone */
+        membus_slave(b, 0)->faults.tx_loss_ppm = membus_slave(b, 1)->faults.tx_loss_ppm = 1000000;
+        membus_add_slave(b, &twin, 0xFF, &f);
+        f.fastscan_when_configured = true;
+        membus_add_slave(b, &twin, 21, &f);
+        lss_master *m = enumeration_ends(b, LSS_E_CONFLICT, "could not be confirmed: several slaves answered", NULL,
+                                         NULL, 600 * SECOND);
+        /* the twin taken off the bus: its answers are lost */
+        membus_slave(b, MIXED_N + 1)->faults.tx_loss_ppm = 1000000;
+        lss_slave_faults_default(&membus_slave(b, 0)->faults);
+        lss_slave_faults_default(&membus_slave(b, 1)->faults);
+        next_ok_free(m, b, "after a find not confirmed");
+}
+END_TEST
+
+/* A slave without Inquire Node-ID, found last, after CiA 305 slaves were
+ * kept in configuration (so confirmed by its own identify, not asked its
+ * node-ID): the verification at the end cannot read its node-ID, every
+ * pass: "could not be verified". It is the last one verified: nothing
+ * after it switches it back to waiting but the verdict's own clean-up. */
+START_TEST(enumeration_not_verified) {
+        static const lss_identity no_inquire = { 0x66, 0x6, 0x2, 0x6602 };
+        membus *b = mixed_bus(1);
+        lss_slave_faults f = faults_latency(1000, 300);
+        f.ignore_cs = LSS_CS_INQUIRE_NODE_ID;
+        membus_add_slave(b, &no_inquire, 0xFF, &f);
+        lss_master *m = enumeration_ends(b, LSS_E_INCOMPLETE, "1 slaves found by fastscan could not be verified", NULL,
+                                         NULL, 600 * SECOND);
+        membus_slave(b, MIXED_N)->faults.ignore_cs = -1;
+        next_ok_free(m, b, "after a find not verified");
+}
+END_TEST
+
+/* Every node-ID 1..127 answers SDO (127 configured slaves): a CANopenNode
+ * slave found cannot be set aside ("no free node-ID left"); it goes back
+ * to waiting untouched. With one device gone quiet the next one is. */
+START_TEST(enumeration_no_free_node_id) {
+        lss_slave_faults plain = faults_latency(1000, 300), co;
+        lss_slave_faults_canopennode(&co);
+        co.latency_us = plain.latency_us;
+        co.jitter_us = plain.jitter_us;
+        membus *b = membus_new(125000);
+        ck_assert_ptr_nonnull(b);
+        membus_set_seed(b, 1);
+        for (unsigned n = LSS_NODE_ID_MIN; n <= LSS_NODE_ID_MAX; n++) {
+                lss_identity id = { 0x44, 0x4, 0x1, 0x10000 + n };
+                membus_add_slave(b, &id, (uint8_t) n, &plain);
+        }
+        membus_add_slave(b, &mixed_ids[3], 0xFF, &co);
+        lss_master *m = enumeration_ends(b, LSS_E_INCOMPLETE, "no free node-ID left to set slave", NULL, NULL,
+                                         600 * SECOND);
+        membus_slave(b, LSS_NODE_ID_MAX - 1)->faults.tx_loss_ppm = 1000000; /* node-ID 127 gone quiet */
+        next_ok_free(m, b, "after no free node-ID");
+}
+END_TEST
+
+/* A slave that answers Fastscan and the inquiries but ignores the
+ * selective switch, found beside a slave kept in configuration: confirmed
+ * by selection, nobody answers it, twice: "Fastscan found … 2 times but no
+ * slave confirmed it" names it (Conflict); the kept slave back in waiting. */
+START_TEST(enumeration_phantom) {
+        membus *b = mixed_bus(1);
+        membus_slave(b, 1)->faults.ignore_cs = LSS_CS_SWITCH_SEL_SERIAL;
+        lss_master *m = enumeration_ends(b, LSS_E_CONFLICT, "00004405 2 times but no slave confirmed it", NULL, NULL,
+                                         600 * SECOND);
+        membus_slave(b, 1)->faults.ignore_cs = -1;
+        next_ok_free(m, b, "after a phantom");
+}
+END_TEST
+
 /* ---- cancel, at every few engine events of a pass ---- */
 
 typedef int (*start_fn)(lss_master *m, membus *b, void *arg);
@@ -340,6 +488,62 @@ START_TEST(slowscan_incomplete) {
 }
 END_TEST
 
+/* A slave that answers Identify Remote Slave only for revision ranges
+ * strictly around its own (revision 7, beside the others' 1): a range
+ * answers, neither half does ("neither half did"). Again with slave 1
+ * falling silent at its selective switch (it takes it, mute, and is lost
+ * to the scan): it must not be left in configuration. */
+START_TEST(slowscan_unresolved) {
+        static const lss_identity strict_id = { 0x44, 0x4, 0x7, 0x4407 };
+        for (int mute = 0; mute < 2; mute++) {
+                membus *b = mixed_bus(1);
+                lss_slave_faults f = faults_latency(1000, 300);
+                f.identify_strict_rev = true;
+                membus_add_slave(b, &strict_id, 0xFF, &f);
+                /* slave 1 takes its selective switch, but its answers are lost from then on */
+                fault_at fa = { .bus = b, .slave = 1, .cs = LSS_CS_SWITCH_SEL_SERIAL, .own = true };
+                if (mute)
+                        membus_set_trace(b, fault_at_trace, &fa);
+                bus_before bb;
+                before_take(&bb, b);
+                lss_master *m = master_default();
+                ck_assert_int_eq(start_slowscan(m, b, NULL), 0);
+                const lss_result *r = lss_drive(m, b, 600 * SECOND, fault_at_hook, &fa);
+                membus_set_trace(b, NULL, NULL);
+                ck_assert_msg(r->status == LSS_E_INCOMPLETE &&
+                                      strstr(r->message, "ranges answered identify each time but neither half did"),
+                              "%s", r->message);
+                as_found(b, &bb, r->message);
+                membus_slave(b, MIXED_N)->faults.identify_strict_rev = false;
+                membus_slave(b, 1)->faults.tx_loss_ppm = 0;
+                next_ok_free(m, b, r->message);
+        }
+}
+END_TEST
+
+/* A slowscan for slave 1 alone: it takes its selective switch, but its
+ * answers are lost from then on. Nobody verified, the scan ends OK with
+ * nobody found; before, it left the slave in configuration (nothing after
+ * the silent switch sent it back to waiting). */
+START_TEST(slowscan_mute_after_select) {
+        membus *b = mixed_bus(1);
+        fault_at fa = { .bus = b, .slave = 1, .cs = LSS_CS_SWITCH_SEL_SERIAL, .own = true };
+        membus_set_trace(b, fault_at_trace, &fa);
+        bus_before bb;
+        before_take(&bb, b);
+        lss_master *m = master_default();
+        const lss_identify_range rg = { 0x44, 0x4, 0, UINT32_MAX, 0x4405, 0x4405 };
+        ck_assert_int_eq(lss_master_slowscan(m, &rg, membus_now(b)), 0);
+        const lss_result *r = lss_drive(m, b, 600 * SECOND, NULL, NULL);
+        ck_assert(fa.on);
+        ck_assert_msg(r->status == LSS_OK && r->n_devices == 0, "%s (%zu)", r->message, r->n_devices);
+        as_found(b, &bb, "slave 1 mute after its selective switch");
+        membus_set_trace(b, NULL, NULL);
+        membus_slave(b, 1)->faults.tx_loss_ppm = 0;
+        next_ok_free(m, b, "after slave 1 went mute");
+}
+END_TEST
+
 /* ---- AutoAssign ---- */
 
 /* A slave answering every Fastscan ends the pass (Conflict) after the
@@ -357,6 +561,29 @@ START_TEST(autoassign_conflict_fastscan_any) {
         expect_outcome(m, &map[0].id, LSS_OUTCOME_ASSIGNED);
         before_moved(&bb, &map[0].id, 11);
         fastscan_any_named(m, b, r, &bb);
+}
+END_TEST
+
+/* The pool is node-ID 20 alone, and slave 2 answers there: the first
+ * non-configured device is refused it ("every node-ID of the pool answers
+ * on the bus", its outcome: the pass goes on), the others find the pool
+ * exhausted; every one as found, and the pass says why. */
+START_TEST(autoassign_pool_all_answer) {
+        lss_autoassign_plan p = { .unknown = LSS_UNKNOWN_POOL, .pool_lo = 20, .pool_hi = 20, .store = true };
+        membus *b = mixed_bus(1);
+        bus_before bb;
+        before_take(&bb, b);
+        lss_master *m = master_default();
+        const lss_result *r = run_pass(m, b, &p);
+        size_t k, said = 0;
+        const lss_outcome *o = lss_master_outcomes(m, &k);
+        for (size_t i = 0; i < k; i++)
+                said += o[i].kind == LSS_OUTCOME_CONFLICT && strstr(o[i].message, "every node-ID of the pool "
+                                                                                  "answers on the bus");
+        ck_assert_msg(r->status == LSS_OK && said == 1, "%zu outcomes name the pool answering (%s)", said,
+                      r->message);
+        as_found(b, &bb, "the pool answering");
+        next_ok_free(m, b, "after the pool answering");
 }
 END_TEST
 
@@ -411,6 +638,23 @@ START_TEST(bitrate_configure_not_answered) {
                 lss_master_free(m);
                 membus_free(b);
         }
+}
+END_TEST
+
+/* Slave 2 refuses the rate after slaves 0 and 1 accepted it: "refused
+ * … nothing activated"; the two are configured back. */
+START_TEST(bitrate_configure_refused) {
+        membus *b = mixed_bus(1);
+        membus_slave(b, 2)->faults.bit_index_unsupported = 1u << 3;
+        bus_before bb;
+        before_take(&bb, b);
+        lss_master *m = master_default();
+        lss_bitrate_device devs[3];
+        const lss_result *r = bitrate_refused(m, b, devs, 3, NULL);
+        ck_assert_msg(r->status == LSS_E_REJECTED && strstr(r->message, "refused 250000 bit/s"), "%s", r->message);
+        as_found(b, &bb, r->message);
+        membus_slave(b, 2)->faults.bit_index_unsupported = 0;
+        next_ok_free(m, b, r->message);
 }
 END_TEST
 
@@ -477,14 +721,23 @@ int main(void) {
         tcase_add_test(tc, enumeration_rounds_exhausted);
         tcase_add_test(tc, enumeration_temporary_not_answered);
         tcase_add_test(tc, enumeration_temporary_kept);
+        tcase_add_test(tc, enumeration_deadline);
+        tcase_add_test(tc, enumeration_not_confirmed);
+        tcase_add_test(tc, enumeration_not_verified);
+        tcase_add_test(tc, enumeration_no_free_node_id);
+        tcase_add_test(tc, enumeration_phantom);
         tcase_add_test(tc, enumeration_cancelled_anywhere);
         tcase_add_test(tc, slowscan_incomplete);
+        tcase_add_test(tc, slowscan_unresolved);
+        tcase_add_test(tc, slowscan_mute_after_select);
         tcase_add_test(tc, slowscan_cancelled_anywhere);
         tcase_add_test(tc, scan_passes_cancelled_anywhere);
         tcase_add_test(tc, autoassign_conflict_fastscan_any);
+        tcase_add_test(tc, autoassign_pool_all_answer);
         tcase_add_test(tc, autoassign_cancelled_anywhere);
         tcase_add_test(tc, bitrate_configure_not_answered);
         tcase_add_test(tc, bitrate_configure_conflict);
+        tcase_add_test(tc, bitrate_configure_refused);
         tcase_add_test(tc, bitrate_global_refused);
         suite_add_tcase(s, tc);
         return run_suite(s);
