@@ -218,17 +218,27 @@ static int verify_each(lss_master *m, lss_bitrate_state *s) {
                 if (s->p.devices[s->i].no_select) {
                         /* no selective switch: its SDO server answers at the new rate */
                         STEP_RETRIED(m, &s->cpc, s->attempt, step_node_in_use(m, s->p.devices[s->i].node_id));
+                        AGAIN_PATIENTLY_IF_SILENT(m, STEP_RETRIED(m, &s->cpc, s->attempt,
+                                                                  step_node_in_use(m, s->p.devices[s->i].node_id)));
                         s->p.devices[s->i].outcome = step_answered(m) ? LSS_BITRATE_SWITCHED : LSS_BITRATE_LOST;
                         s->n_bad += !step_answered(m);
                         continue;
                 }
+                /* "Silent at the new rate" is a verdict: a host stalled
+                 * right after the switch holds answers back far beyond the
+                 * waits (the VM, loaded: 38 ms), so silence is asked again
+                 * patiently first. */
                 for (s->attempt_conflict = 0;; s->attempt_conflict++) {
                         SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id);
+                        AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id));
                         if (!step_answered(m))
                                 break;
                         /* and a second, different answer: a stray 44 cannot make a device look switched */
                         REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                                         LSS_CS_INQUIRE_NODE_ID);
+                        AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->cpc, s->attempt,
+                                                                     lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                                                     LSS_CS_INQUIRE_NODE_ID));
                         if (!step_conflict(m) || s->attempt_conflict >= m->timing.cfg.retries)
                                 break;
                         /* more than one slave still in configuration: the switch
