@@ -329,8 +329,17 @@ void step_on_time(lss_master *m, uint64_t now) {
                 s->phase = PHASE_LATE_GUARD;
                 s->end_at = d + (s->late_us ? s->late_us : lss_timing_late_guard(&m->timing, step_wait_kind(s)));
                 return;
-        case PHASE_ANSWER_GUARD:
         case PHASE_LATE_GUARD:
+                /* no echo yet: the request is not known to be on the wire,
+                 * its wait has not begun (a loaded host delivers the echo
+                 * late; the next request would overlap this one's answer) */
+                if (s->needs_echo && s->written && !s->confirmed && now < s->sent_at + LSS_ECHO_WAIT_MAX_US) {
+                        s->end_at = s->sent_at + LSS_ECHO_WAIT_MAX_US;
+                        return;
+                }
+                s->phase = PHASE_DONE;
+                return;
+        case PHASE_ANSWER_GUARD:
                 s->phase = PHASE_DONE;
                 return;
         default:

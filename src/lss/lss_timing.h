@@ -43,6 +43,10 @@
  * a slave named misbehaving) is waited for at least this long: a loaded
  * host stalls an answer for 100-200 ms, far beyond any timeout. */
 #define LSS_VERDICT_WAIT_FLOOR_US 250000u
+/* With tx confirmation a step's wait begins at its request's echo: one
+ * whose echo a loaded host holds back waits for it, this long at most
+ * after the write (then it is silent: never on the wire, no ACK, bus-off). */
+#define LSS_ECHO_WAIT_MAX_US 1000000u
 /* ... but an answer far sooner than the first few is judged early already:
  * a late answer taken for its own there read a bit of a pass's first
  * fastscan wrong (a VM candump: 0.15 ms into the step, with 3 samples of
