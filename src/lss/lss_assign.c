@@ -235,6 +235,16 @@ int proc_fastscan_assign(lss_master *m, lss_assign_state *s) {
         for (s->attempt = 0;; s->attempt++) {
                 s->fs.pc = 0;
                 PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
+                if (s->fs.none && !s->fs.ping_late_us) {
+                        /* "nobody left" is a verdict (a caller's loop ends on
+                         * it): a stalled host's answers come after a patient
+                         * wait (a loaded VM: 6 of 8 assigned, then "not found") */
+                        SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                        s->fs.ping_again = true;
+                        s->fs.ping_late_us = lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US);
+                        s->fs.pc = 0;
+                        PT_CALL(&s->pc, proc_fastscan(m, &s->fs));
+                }
                 if (s->fs.none) {
                         master_fail_at(m, LSS_E_NOT_FOUND, LSS_SERVICE_FASTSCAN, LSS_REASON_NO_ANSWER,
                                        "no non-configured slave answered the fastscan");
