@@ -348,13 +348,26 @@ static int enumerate_all(lss_master *m, lss_aa_state *s) {
                  * waiting, and nobody was set aside (to get 255 back), the
                  * enumerations left (other vendors, blind) would only ask it
                  * again, a full wait each. */
-                if (m->sc.nobody)
+                if (m->sc.nobody && m->result.status == LSS_OK) {
+                        s->failed = LSS_OK; /* nobody left unfound: an earlier verdict is answered */
                         break;
+                }
                 if (m->sc.misbehaving) {
                         /* nothing more can be found by fastscan: report it, assign nothing of this scan */
                         aa_enumeration_failed(s, m);
                         break;
                 }
+                /* Any other verdict (did not converge, its deadline, a find not
+                 * confirmed or verified, no free node-ID) leaves slaves it may
+                 * not have reached: what it verified is assigned, but the
+                 * verdict is the pass's unless a blind enumeration after it
+                 * completes. Dropped, the pass said "done" with a slave never
+                 * reached (issue 38). */
+                if (m->result.status != LSS_OK) {
+                        s->failed = m->result.status;
+                        snprintf(s->failed_msg, sizeof(s->failed_msg), "%s", m->result.message);
+                } else if (s->pair == s->plan->n_map)
+                        s->failed = LSS_OK;
                 aa_result_reset(m);
                 if (aa_todo_take(s, m->devices, m->n_devices) < 0)
                         continue;

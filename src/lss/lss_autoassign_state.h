@@ -41,7 +41,8 @@ typedef struct lss_aa_state {
         unsigned blind_passes;
         bool avoid[128];        /* node-IDs an enumeration may not set a slave aside with */
         lss_enum_direct direct; /* the enumeration gives pool node-IDs as it finds (lss_autoassign.c) */
-        enum lss_status failed; /* an enumeration met a slave that does not follow CiA 305 */
+        enum lss_status failed; /* an enumeration's verdict: a slave that does not follow CiA 305,
+                                 * or one not answered by a complete enumeration after it */
         char failed_msg[400];
         /* reset_after_pass (lss_autoassign_reset.c) */
         int r_pc;

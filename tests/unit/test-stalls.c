@@ -127,7 +127,11 @@ START_TEST(scan_beside_canopennode_slaves) {
 END_TEST
 
 /* AutoAssign with unknown = "ignore" and the map { 0x55:0x1:*:0x5001 -> 30 }:
- * it moves 0x5001 and touches nothing else, or fails naming nobody falsely. */
+ * it moves 0x5001 and touches nothing else, or fails naming nobody falsely.
+ * A pass that ends on an enumeration's verdict keeps what it moved and
+ * verified: 6 of 1000 seeds end "fastscan did not converge after 0 slaves"
+ * (the blind enumeration; before, "done" with the two non-configured slaves
+ * never reached). */
 START_TEST(autoassign_of_the_issue_network) {
         const size_t n = sizeof(issue_network) / sizeof(issue_network[0]);
         const lss_map_entry map[] = { { { 0x55, 0x1, 0, 0x5001 }, false, 30 } };
@@ -155,7 +159,9 @@ START_TEST(autoassign_of_the_issue_network) {
                               "seed %u (%u ms stalls): done, 5001 %s (%s)", (unsigned) seed,
                               stall_us[seed % 4] / 1000, moved ? lss_outcome_name(moved->kind) : "without outcome",
                               moved ? moved->message : "");
-                if (r->status == LSS_OK)
+                /* also when the pass ends on an enumeration's verdict: it was
+                 * moved and verified before */
+                if (moved && moved->kind == LSS_OUTCOME_ASSIGNED)
                         before_moved(&bb, &issue_network[5].id, 30);
                 as_found(b, &bb, seed_name(name, sizeof(name), seed));
                 pass_free(m, b);

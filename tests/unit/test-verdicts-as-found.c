@@ -245,13 +245,14 @@ END_TEST
 typedef struct stall_at {
         fault_at fa;        /* only its trigger: Configure Node-ID of a temporary node-ID */
         bool stalled;
+        uint8_t lo, hi;     /* nonzero: of a node-ID lo..hi instead (a pool's) */
 } stall_at;
 
 static void stall_trace(void *ud, const lss_frame *f, uint64_t t_us) {
         stall_at *st = ud;
         (void) t_us;
-        if (f->id == 0x7E5 && f->data[0] == LSS_CS_CONFIGURE_NODE_ID && f->data[1] >= 100 &&
-            f->data[1] <= LSS_NODE_ID_MAX)
+        if (f->id == 0x7E5 && f->data[0] == LSS_CS_CONFIGURE_NODE_ID && f->data[1] >= (st->lo ? st->lo : 100) &&
+            f->data[1] <= (st->hi ? st->hi : LSS_NODE_ID_MAX))
                 st->fa.on = true;
 }
 
@@ -587,6 +588,125 @@ START_TEST(autoassign_pool_all_answer) {
 }
 END_TEST
 
+/* The plans an enumeration's verdict reaches in AutoAssign: 0 blind from
+ * the pool 30..40; 1 a map (slave 1 to node-ID 10) and that pool; 2 the
+ * map, unknown devices left alone. */
+static const lss_map_entry verdict_map[] = { { { 0x44, 0x4, 0x1, 0x4405 }, true, 10 } };
+
+static lss_autoassign_plan verdict_plan(int which) {
+        lss_autoassign_plan p = { .unknown = which == 2 ? LSS_UNKNOWN_IGNORE : LSS_UNKNOWN_POOL, .pool_lo = 30,
+                                  .pool_hi = 40, .store = true };
+        if (which > 0) {
+                p.map = verdict_map;
+                p.n_map = 1;
+        }
+        return p;
+}
+
+/* An AutoAssign pass on `b` (driven with `hook`). A slave non-configured
+ * before that has no outcome was never reached: a pass that missed one must
+ * not end OK, "done" (issue 38). Every slave as found but what the outcomes
+ * say the pass moved. */
+static const lss_result *autoassign_no_silent_miss(lss_master *m, membus *b, const lss_autoassign_plan *p,
+                                                   lss_drive_hook hook, void *ud, const char *what) {
+        bus_before bb;
+        size_t k;
+        before_take(&bb, b);
+        ck_assert_int_eq(lss_master_autoassign(m, p, membus_now(b)), 0);
+        /* past the enumeration's deadline (a stall) */
+        const lss_result *r = lss_drive(m, b, 1800 * SECOND, hook, ud);
+        const lss_outcome *o = lss_master_outcomes(m, &k);
+        for (size_t i = 0; i < k; i++)
+                if (o[i].kind == LSS_OUTCOME_ASSIGNED || o[i].kind == LSS_OUTCOME_POOL)
+                        before_moved(&bb, &o[i].id, o[i].new_node_id);
+        for (size_t i = 0; i < bb.n; i++)
+                ck_assert_msg(r->status != LSS_OK || bb.node_id[i] != LSS_NODE_ID_UNCONFIGURED ||
+                                      outcome_of(m, &bb.id[i]),
+                              "%s: %x was never reached, the pass ended OK", what, bb.id[i].serial);
+        as_found(b, &bb, what);
+        return r;
+}
+
+/* An enumeration of the pass ends on a verdict while a slave is still
+ * unfound: slave 0 loses 30 % of what it receives ("fastscan did not
+ * converge", or its rounds found nobody new), or a slave without Inquire
+ * Node-ID ("could not be confirmed", beside slaves kept in configuration
+ * "could not be verified"). What the enumeration verified is assigned,
+ * but the pass ends with its verdict: before, the verdict was dropped and
+ * the pass said OK with the slave never reached (9, 10 and 10 of the 10
+ * seeds of the plans; the slave without Inquire Node-ID in each plan).
+ * Healed, the next pass reaches every slave. */
+START_TEST(autoassign_enumeration_verdict_kept) {
+        static const lss_identity no_inquire = { 0x66, 0x6, 0x2, 0x6602 };
+        for (int plan = 0; plan < 3; plan++) {
+                lss_autoassign_plan p = verdict_plan(plan);
+                unsigned said = 0;
+                char what[64];
+                for (uint64_t seed = 1; seed <= 10; seed++) {
+                        membus *b = mixed_bus(seed);
+                        membus_slave(b, 0)->faults.rx_loss_ppm = 300000;
+                        lss_master *m = master_default();
+                        snprintf(what, sizeof(what), "plan %d, seed %u", plan, (unsigned) seed);
+                        const lss_result *r = autoassign_no_silent_miss(m, b, &p, NULL, NULL, what);
+                        said += r->status == LSS_E_INCOMPLETE && (strstr(r->message, "fastscan did not converge") ||
+                                                                 strstr(r->message, "found nobody new"));
+                        lss_master_free(m);
+                        membus_slave(b, 0)->faults.rx_loss_ppm = 0;
+                        m = master_default();
+                        r = autoassign_no_silent_miss(m, b, &p, NULL, NULL, what);
+                        ck_assert_msg(r->status == LSS_OK, "%s, healed: %s", what, r->message);
+                        pass_free(m, b);
+                }
+                ck_assert_msg(said > 0, "plan %d: no seed ended on the enumeration's verdict", plan);
+
+                membus *b = mixed_bus(1);
+                lss_slave_faults f = faults_latency(1000, 300);
+                f.ignore_cs = LSS_CS_INQUIRE_NODE_ID;
+                membus_add_slave(b, &no_inquire, 0xFF, &f);
+                lss_master *m = master_default();
+                snprintf(what, sizeof(what), "plan %d, no Inquire Node-ID", plan);
+                const lss_result *r = autoassign_no_silent_miss(m, b, &p, NULL, NULL, what);
+                ck_assert_msg(r->status != LSS_OK && strstr(r->message, plan == 2 ? "could not be verified" :
+                                                                                    "could not be confirmed"),
+                              "%s: %s", what, r->message);
+                pass_free(m, b);
+        }
+}
+END_TEST
+
+/* The host stalls past the enumeration's deadline right after the first
+ * pool node-ID went out (plans 0, 1): that enumeration stops at its
+ * deadline, but a blind one runs after it (again, as it gave node-IDs; or
+ * after the vendor's) and completes: OK, every non-configured slave from
+ * the pool. After the CANopenNode slave was set aside in plan 2 the blind
+ * enumeration stops at its deadline and nothing looks after it: that is
+ * the pass's verdict, the two it found and verified left alone. */
+START_TEST(autoassign_enumeration_deadline) {
+        for (int plan = 0; plan < 3; plan++) {
+                lss_autoassign_plan p = verdict_plan(plan);
+                membus *b = mixed_bus(1);
+                stall_at st = { .fa = { .bus = b }, .lo = plan < 2 ? p.pool_lo : 0, .hi = plan < 2 ? p.pool_hi : 0 };
+                membus_set_trace(b, stall_trace, &st);
+                lss_master *m = master_default();
+                char what[32];
+                snprintf(what, sizeof(what), "plan %d", plan);
+                const lss_result *r = autoassign_no_silent_miss(m, b, &p, stall_hook, &st, what);
+                ck_assert(st.stalled);
+                if (plan < 2) {
+                        ck_assert_msg(r->status == LSS_OK, "%s: %s", what, r->message);
+                        expect_outcome(m, &mixed_ids[0], LSS_OUTCOME_POOL);
+                        expect_outcome(m, &mixed_ids[3], LSS_OUTCOME_POOL);
+                } else {
+                        ck_assert_msg(r->status == LSS_E_INCOMPLETE && strstr(r->message, "stopped at its deadline"),
+                                      "%s: %s", what, r->message);
+                        expect_outcome(m, &mixed_ids[0], LSS_OUTCOME_UNKNOWN);
+                        expect_outcome(m, &mixed_ids[3], LSS_OUTCOME_UNKNOWN);
+                }
+                pass_free(m, b);
+        }
+}
+END_TEST
+
 /* ---- SetBitrate before its activation ---- */
 
 /* The retune a test host does at once. */
@@ -735,6 +855,8 @@ int main(void) {
         tcase_add_test(tc, autoassign_conflict_fastscan_any);
         tcase_add_test(tc, autoassign_pool_all_answer);
         tcase_add_test(tc, autoassign_cancelled_anywhere);
+        tcase_add_test(tc, autoassign_enumeration_verdict_kept);
+        tcase_add_test(tc, autoassign_enumeration_deadline);
         tcase_add_test(tc, bitrate_configure_not_answered);
         tcase_add_test(tc, bitrate_configure_conflict);
         tcase_add_test(tc, bitrate_configure_refused);
