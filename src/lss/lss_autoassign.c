@@ -27,10 +27,14 @@ void lss_autoassign_free_state(lss_master *m) {
 
 int aa_todo_take(lss_aa_state *s, const lss_device *d, size_t n) {
         s->n_todo = 0;
+        if (aa_outcome_reserve(s, n) < 0)
+                return -ENOMEM;
         if (n > s->cap_todo) {
                 lss_device *t = realloc(s->todo, n * sizeof(*t));
-                if (!t)
+                if (!t) {
+                        s->oom = true;
                         return -ENOMEM;
+                }
                 s->todo = t;
                 s->cap_todo = n;
         }
@@ -275,6 +279,9 @@ static bool direct_choose(lss_master *m, void *ud, const lss_identity *id, const
         lss_device d = { .id = *id, .node_id = LSS_NODE_ID_UNCONFIGURED };
         if (aa_already_handled(s, id) || aa_lookup(s->plan, id) >= 0 || lss_replace_candidate(s->plan, s->handled, &d))
                 return false;
+        /* no node-ID given without room for its outcome (s->oom: the pass fails) */
+        if (aa_outcome_reserve(s, 1) < 0)
+                return false;
         s->target = pool_next_direct(s, aside);
         if (s->target == 0)
                 return false; /* the pool is exhausted: handle_found() says so */
@@ -500,7 +507,9 @@ static int proc_autoassign(lss_master *m) {
                 PT_CALL(&s->pc, aa_proc_reset_pending(m, s));
         }
         m->result.status = LSS_OK;
-        if (s->failed != LSS_OK)
+        if (s->oom)
+                master_fail(m, LSS_E_INCOMPLETE, "out of memory: devices found were left as they were");
+        else if (s->failed != LSS_OK)
                 master_fail(m, s->failed, "%s", s->failed_msg);
 out:
         m->n_devices = 0; /* the outcomes are the result */

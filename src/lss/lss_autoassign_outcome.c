@@ -2,6 +2,7 @@
 /* The auto-assignment pass's outcomes, one per device it dealt with: how a
  * found device's assignment, the second look and the entries the bus has
  * not become outcomes (the pass is in lss_autoassign.c). */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,18 +28,28 @@ size_t aa_count_given(const lss_aa_state *s) {
         return n;
 }
 
+int aa_outcome_reserve(lss_aa_state *s, size_t n) {
+        if (s->n_out + n <= s->cap_out)
+                return 0;
+        size_t cap = s->cap_out ? s->cap_out * 2 : 16;
+        while (cap < s->n_out + n)
+                cap *= 2;
+        lss_outcome *o = realloc(s->out, cap * sizeof(*o));
+        if (!o) {
+                s->oom = true;
+                return -ENOMEM;
+        }
+        s->out = o;
+        s->cap_out = cap;
+        return 0;
+}
+
 lss_outcome *aa_outcome_add(lss_aa_state *s, const lss_identity *id) {
         for (size_t i = 0; i < s->n_out; i++)
                 if (lss_identity_equal(&s->out[i].id, id))
                         return &s->out[i]; /* found twice (e.g. by two scans): one outcome */
-        if (s->n_out == s->cap_out) {
-                size_t cap = s->cap_out ? s->cap_out * 2 : 16;
-                lss_outcome *o = realloc(s->out, cap * sizeof(*o));
-                if (!o)
-                        return NULL;
-                s->out = o;
-                s->cap_out = cap;
-        }
+        if (aa_outcome_reserve(s, 1) < 0)
+                return NULL;
         lss_outcome *o = &s->out[s->n_out++];
         memset(o, 0, sizeof(*o));
         o->id = *id;

@@ -44,6 +44,8 @@ typedef struct lss_aa_state {
         enum lss_status failed; /* an enumeration's verdict: a slave that does not follow CiA 305,
                                  * or one not answered by a complete enumeration after it */
         char failed_msg[400];
+        bool oom;               /* an outcome or the devices found could not be kept: the
+                                 * pass fails "out of memory", never "done" without them */
         /* reset_after_pass (lss_autoassign_reset.c) */
         int r_pc;
         size_t k;
@@ -79,8 +81,12 @@ bool aa_in_place(lss_master *m, lss_aa_state *s, const bool *unstored);
 
 /* How many devices this pass gave a node-ID. */
 size_t aa_count_given(const lss_aa_state *s);
-/* The outcome of this identity, added when there is none yet (NULL: no memory). */
+/* The outcome of this identity, added when there is none yet (NULL: no
+ * memory, and s->oom set). */
 lss_outcome *aa_outcome_add(lss_aa_state *s, const lss_identity *id);
+/* Room for n more outcomes, so that a device's assignment is never done
+ * without room to report it; -ENOMEM (s->oom set). */
+int aa_outcome_reserve(lss_aa_state *s, size_t n);
 /* The identity has an outcome other than missing. */
 bool aa_already_handled(const lss_aa_state *s, const lss_identity *id);
 /* The map entry that names this device, -1 none. */

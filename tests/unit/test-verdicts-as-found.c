@@ -467,6 +467,80 @@ START_TEST(autoassign_cancelled_anywhere) {
 }
 END_TEST
 
+/* ---- out of memory ---- */
+
+/* This program is linked with --wrap=realloc (tests/unit/meson.build): an
+ * armed countdown fails one realloc, the engine's only growing allocation. */
+void *__real_realloc(void *p, size_t n);
+void *__wrap_realloc(void *p, size_t n);
+static long realloc_countdown = -1;
+
+void *__wrap_realloc(void *p, size_t n) {
+        if (realloc_countdown >= 0 && realloc_countdown-- == 0)
+                return NULL;
+        return __real_realloc(p, n);
+}
+
+/* The pass `start` begins fails its 1st, 2nd, ... realloc until it makes
+ * fewer: each ends "out of memory", or OK where the engine can do without
+ * (the list of identities announced), with the bus as found (but what its
+ * outcomes say it assigned), and the next operation succeeds. An
+ * enumeration first leaves the bus's own queues at their size: every
+ * realloc counted is the engine's. */
+static void out_of_memory_anywhere(start_fn start, void *arg) {
+        unsigned n = 0, n_oom = 0;
+        for (long k = 0;; k++, n++) {
+                membus *b = mixed_bus(1);
+                lss_master *w = master_default();
+                ck_assert_int_eq(start_enumerate(w, b, NULL), 0);
+                run(w, b);
+                lss_master_free(w);
+                lss_drive_idle(b, SECOND);
+                bus_before bb;
+                before_take(&bb, b);
+                lss_master *m = master_default();
+                ck_assert_int_eq(start(m, b, arg), 0);
+                realloc_countdown = k;
+                const lss_result *r = run(m, b);
+                bool failed = realloc_countdown < 0;
+                realloc_countdown = -1;
+                char what[64];
+                snprintf(what, sizeof(what), "realloc %ld failed", k);
+                ck_assert_msg(!failed || r->status == LSS_OK || strstr(r->message, "out of memory"), "%s: %s", what,
+                              r->message);
+                n_oom += failed && r->status != LSS_OK;
+                size_t j;
+                const lss_outcome *o = lss_master_outcomes(m, &j);
+                for (size_t i = 0; i < j; i++)
+                        if (o[i].kind == LSS_OUTCOME_ASSIGNED || o[i].kind == LSS_OUTCOME_POOL)
+                                before_moved(&bb, &o[i].id, o[i].new_node_id);
+                if (failed)
+                        as_found(b, &bb, what);
+                next_enumeration_ok(b, what);
+                lss_master_free(m);
+                membus_free(b);
+                if (!failed)
+                        break;
+        }
+        ck_assert_uint_gt(n_oom, 0);
+}
+
+START_TEST(enumeration_out_of_memory) {
+        out_of_memory_anywhere(start_enumerate, NULL);
+}
+END_TEST
+
+START_TEST(slowscan_out_of_memory) {
+        out_of_memory_anywhere(start_slowscan, NULL);
+}
+END_TEST
+
+START_TEST(autoassign_out_of_memory) {
+        lss_autoassign_plan p = { .unknown = LSS_UNKNOWN_POOL, .pool_lo = 30, .pool_hi = 40 };
+        out_of_memory_anywhere(start_autoassign, &p);
+}
+END_TEST
+
 /* ---- slowscan ---- */
 
 /* A slave that answers identify but not the selective switch: "not the
@@ -855,6 +929,9 @@ int main(void) {
         tcase_add_test(tc, autoassign_conflict_fastscan_any);
         tcase_add_test(tc, autoassign_pool_all_answer);
         tcase_add_test(tc, autoassign_cancelled_anywhere);
+        tcase_add_test(tc, enumeration_out_of_memory);
+        tcase_add_test(tc, slowscan_out_of_memory);
+        tcase_add_test(tc, autoassign_out_of_memory);
         tcase_add_test(tc, autoassign_enumeration_verdict_kept);
         tcase_add_test(tc, autoassign_enumeration_deadline);
         tcase_add_test(tc, bitrate_configure_not_answered);
