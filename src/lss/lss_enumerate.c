@@ -226,6 +226,7 @@ static int keep_found(lss_scan_state *s, uint8_t node) {
         s->cand[s->n_cand - 1].node_id = node;
         s->kept_now = s->n_cand - 1;
         s->n_kept++;
+        s->n_kept_bent += s->bends; /* a dry run keeps one that answered the check */
         return 0;
 }
 
@@ -277,6 +278,7 @@ static int set_aside(lss_master *m, lss_scan_state *s) {
                 /* refused (a device with a narrower node-ID range): it stays
                  * in configuration, where a CiA 305 slave takes no part */
                 s->n_kept++;
+                s->n_kept_bent++;
                 goto out;
         }
         s->cand[s->n_cand - 1].node_id = 0;
@@ -549,6 +551,7 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 s->again->node_id = s->node;
                 s->kept_now = (size_t) (s->again - s->cand);
                 s->n_kept++;
+                s->n_kept_bent++;
                 goto reselect;
         }
         if (s->confirm == CONFIRM_NOBODY) {
@@ -758,7 +761,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
         s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
         s->misbehaving = s->nobody = s->pinged = false;
         for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
-                s->n_cand = s->n_direct = s->n_aside = s->n_kept = 0;
+                s->n_cand = s->n_direct = s->n_aside = s->n_kept = s->n_kept_bent = 0;
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
                 s->recheck = s->patient_round = false;
                 s->next_temp = LSS_NODE_ID_MAX;
@@ -791,12 +794,17 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                             finds_of(s));
                                 break;
                         }
-                        /* slaves kept in configuration may answer every request */
                         /* A look again after a silent ping is for a slave that
                          * lost it, or one that sat in configuration uncounted:
                          * not slow ones, whose answers the first look, waiting
                          * the timeout, took in (or made the waits patient). */
-                        s->fs = (lss_fastscan_state) { .known = s->known, .others_answer = s->n_kept > 0,
+                        /* A slave kept in configuration that answered Fastscan
+                         * there answers every request: no step of the fastscan
+                         * ends at its answer. The others were asked and were
+                         * silent; one whose answers to that were lost or
+                         * stalled shows as a second frame or a stray answer,
+                         * which turn that off too (lss_fastscan.c, judge_lone). */
+                        s->fs = (lss_fastscan_state) { .known = s->known, .others_answer = s->n_kept_bent > 0,
                                                        .ping_again = s->looks > 0 };
                         /* A Scan that finds nobody says the bus is empty, and
                          * nothing checks that later: its ping may be answered by
