@@ -213,6 +213,9 @@ static void step_identify_found(lss_master *m, const lss_scan_state *s) {
         const lss_identify_range r = { s->found.vendor, s->found.product, s->found.revision, s->found.revision,
                                        s->found.serial, s->found.serial };
         step_identify(m, &r);
+        /* only F matches, and any answer is the same frame (cs 0x4F): no
+         * other answer to wait for, as after a selective switch */
+        m->step.ends_at_answer = true;
         step_start(m);
 }
 
