@@ -857,10 +857,19 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                  * costs a retry, not a slave) or one whose fastscan
                                  * confirmation was answered after its step ended, now in
                                  * configuration, uncounted, taking no part: back to
-                                 * waiting, and ping again. */
-                                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
-                                s->rpc = 0;
-                                PT_CALL(&s->pc, reselect_kept(m, s));
+                                 * waiting, and ping again. The switch has no answer:
+                                 * twice (a slave that loses it stays in configuration).
+                                 * It lets the kept slaves go, each selected back after
+                                 * it (0.75 s for 126 at 125 kbit/s): so only the first
+                                 * look of a run switches, as nobody goes into
+                                 * configuration while the pings are silent, and every
+                                 * look once the operation lost frames. */
+                                if (s->looks == 1 || m->loss.lost > 0) {
+                                        SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                                        SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                                        s->rpc = 0;
+                                        PT_CALL(&s->pc, reselect_kept(m, s));
+                                }
                                 continue;
                         }
                         if (s->looks > 0) /* a silent ping was wrong: lost, or somebody uncounted */
