@@ -674,8 +674,19 @@ static int reexamine_kept(lss_master *m, lss_scan_state *s) {
                 PT_CALL(&s->xpc, answers_in_configuration(m, s));
                 if (!s->bends)
                         continue;
+                /* Kept beside others, it was confirmed by identify, and its
+                 * node-ID taken for 255 (it answered Fastscan): one that
+                 * answers it in configuration may be a configured CANopenNode
+                 * slave, whose node-ID a temporary one would replace. Alone
+                 * in configuration now: asked. */
+                REQUEST_RETRIED(m, &s->xpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                LSS_CS_INQUIRE_NODE_ID);
+                if (!step_answered(m) || step_conflict(m)) {
+                        s->n_kept_bent++; /* still kept: the verdicts decide */
+                        continue;
+                }
                 /* no longer kept: set aside as a new candidate, or let go (configured) */
-                s->node = s->cand[s->x].node_id;
+                s->node = m->step.answer.data[1];
                 memmove(&s->cand[s->x], &s->cand[s->x + 1], (s->n_cand - s->x - 1) * sizeof(s->cand[0]));
                 s->n_cand--;
                 s->n_kept--;
