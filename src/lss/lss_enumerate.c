@@ -213,6 +213,9 @@ static void step_identify_found(lss_master *m, const lss_scan_state *s) {
         const lss_identify_range r = { s->found.vendor, s->found.product, s->found.revision, s->found.revision,
                                        s->found.serial, s->found.serial };
         step_identify(m, &r);
+        /* only F matches, and any answer is the same frame (cs 0x4F): no
+         * other answer to wait for, as after a selective switch */
+        m->step.ends_at_answer = true;
         step_start(m);
 }
 
@@ -226,6 +229,7 @@ static int keep_found(lss_scan_state *s, uint8_t node) {
         s->cand[s->n_cand - 1].node_id = node;
         s->kept_now = s->n_cand - 1;
         s->n_kept++;
+        s->n_kept_bent += s->bends; /* a dry run keeps one that answered the check */
         return 0;
 }
 
@@ -277,6 +281,7 @@ static int set_aside(lss_master *m, lss_scan_state *s) {
                 /* refused (a device with a narrower node-ID range): it stays
                  * in configuration, where a CiA 305 slave takes no part */
                 s->n_kept++;
+                s->n_kept_bent++;
                 goto out;
         }
         s->cand[s->n_cand - 1].node_id = 0;
@@ -549,6 +554,7 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                 s->again->node_id = s->node;
                 s->kept_now = (size_t) (s->again - s->cand);
                 s->n_kept++;
+                s->n_kept_bent++;
                 goto reselect;
         }
         if (s->confirm == CONFIRM_NOBODY) {
@@ -668,8 +674,19 @@ static int reexamine_kept(lss_master *m, lss_scan_state *s) {
                 PT_CALL(&s->xpc, answers_in_configuration(m, s));
                 if (!s->bends)
                         continue;
+                /* Kept beside others, it was confirmed by identify, and its
+                 * node-ID taken for 255 (it answered Fastscan): one that
+                 * answers it in configuration may be a configured CANopenNode
+                 * slave, whose node-ID a temporary one would replace. Alone
+                 * in configuration now: asked. */
+                REQUEST_RETRIED(m, &s->xpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                LSS_CS_INQUIRE_NODE_ID);
+                if (!step_answered(m) || step_conflict(m)) {
+                        s->n_kept_bent++; /* still kept: the verdicts decide */
+                        continue;
+                }
                 /* no longer kept: set aside as a new candidate, or let go (configured) */
-                s->node = s->cand[s->x].node_id;
+                s->node = m->step.answer.data[1];
                 memmove(&s->cand[s->x], &s->cand[s->x + 1], (s->n_cand - s->x - 1) * sizeof(s->cand[0]));
                 s->n_cand--;
                 s->n_kept--;
@@ -758,7 +775,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
         s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
         s->misbehaving = s->nobody = s->pinged = false;
         for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
-                s->n_cand = s->n_direct = s->n_aside = s->n_kept = 0;
+                s->n_cand = s->n_direct = s->n_aside = s->n_kept = s->n_kept_bent = 0;
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
                 s->recheck = s->patient_round = false;
                 s->next_temp = LSS_NODE_ID_MAX;
@@ -791,12 +808,17 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                             finds_of(s));
                                 break;
                         }
-                        /* slaves kept in configuration may answer every request */
                         /* A look again after a silent ping is for a slave that
                          * lost it, or one that sat in configuration uncounted:
                          * not slow ones, whose answers the first look, waiting
                          * the timeout, took in (or made the waits patient). */
-                        s->fs = (lss_fastscan_state) { .known = s->known, .others_answer = s->n_kept > 0,
+                        /* A slave kept in configuration that answered Fastscan
+                         * there answers every request: no step of the fastscan
+                         * ends at its answer. The others were asked and were
+                         * silent; one whose answers to that were lost or
+                         * stalled shows as a second frame or a stray answer,
+                         * which turn that off too (lss_fastscan.c, judge_lone). */
+                        s->fs = (lss_fastscan_state) { .known = s->known, .others_answer = s->n_kept_bent > 0,
                                                        .ping_again = s->looks > 0 };
                         /* A Scan that finds nobody says the bus is empty, and
                          * nothing checks that later: its ping may be answered by
@@ -846,10 +868,19 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                  * costs a retry, not a slave) or one whose fastscan
                                  * confirmation was answered after its step ended, now in
                                  * configuration, uncounted, taking no part: back to
-                                 * waiting, and ping again. */
-                                SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
-                                s->rpc = 0;
-                                PT_CALL(&s->pc, reselect_kept(m, s));
+                                 * waiting, and ping again. The switch has no answer:
+                                 * twice (a slave that loses it stays in configuration).
+                                 * It lets the kept slaves go, each selected back after
+                                 * it (0.75 s for 126 at 125 kbit/s): so only the first
+                                 * look of a run switches, as nobody goes into
+                                 * configuration while the pings are silent, and every
+                                 * look once the operation lost frames. */
+                                if (s->looks == 1 || m->loss.lost > 0) {
+                                        SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                                        SEND(m, &s->pc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
+                                        s->rpc = 0;
+                                        PT_CALL(&s->pc, reselect_kept(m, s));
+                                }
                                 continue;
                         }
                         if (s->looks > 0) /* a silent ping was wrong: lost, or somebody uncounted */

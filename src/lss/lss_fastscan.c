@@ -27,8 +27,8 @@
  * in, and a wrong bit costs what a late answer costs, a field nobody
  * confirms and a retry. After one, the guard stays for the rest of this
  * fastscan; also on a sign of other answers (the same answer again, a stray
- * one, frames lost), a new ping, or slaves kept in configuration (they may
- * answer any request). */
+ * one, frames lost), a new ping, or a slave kept in configuration that
+ * answered Fastscan there (it answers any request). */
 static void judge_lone(lss_master *m, lss_fastscan_state *s) {
         if (m->final_repeated || m->stats.stray_answers != s->strays || m->step.void_ || s->others_answer ||
             s->lone_failed)

@@ -109,7 +109,7 @@ typedef struct lss_fastscan_state {
         uint32_t ping_late_us;     /* nonzero: the ping's late guard (lss_step.late_us) */
         bool ping_again;           /* the ping repeats one that waited the timeout in silence:
                                     * it waits as an answered step would (not first contact) */
-        bool others_answer;        /* slaves kept in configuration may answer any request */
+        bool others_answer;        /* a slave kept in configuration answers any request */
         bool lone;                 /* one slave alone answered a step: only it takes part now */
         bool lone_failed;          /* a field read while lone was not confirmed */
         uint64_t strays;           /* stats.stray_answers when lone was last judged */
@@ -198,6 +198,8 @@ typedef struct lss_scan_state {
         int pc, vpc, cpc, apc, rpc, hpc, bpc;
         /* enumeration: bounds, what the last fastscan found, devices set aside */
         unsigned rounds, phantoms, n_kept, n_aside, field, stuck;
+        unsigned n_kept_bent;   /* of n_kept: slaves that answered Fastscan in configuration state
+                                 * (or may: found again after set aside), who answer any request */
         bool restore;           /* slaves are set aside: a cancel waits for their give-back */
         bool keep_stopped;      /* the caller stopped every device: keep those set aside stopped */
         bool no_set_aside;      /* a dry run: found non-configured slaves stay in configuration
