@@ -975,7 +975,9 @@ def test_txqueue_full():
 # ---- life cycle ----
 
 def test_lifecycle():
-    slaves = [Slave(0x9A, 3, 1, 0x1000 + i) for i in range(6)]
+    # 24: the Scan must still run when Cancel comes (busctl takes 2 s in a
+    # slow VM; a Scan of 6 ended first on 2026-12-02)
+    slaves = [Slave(0x9A, 3, 1, 0x1000 + i) for i in range(24)]
     with Env({'vcan0': slaves}, candump=True, notify=True) as env:
         env.notify.settimeout(10)
         msgs = ''
