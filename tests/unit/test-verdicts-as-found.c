@@ -10,6 +10,8 @@
  * a host that stalls past it; "no free node-ID" on a bus of 128). Not
  * provoked: out of memory (the engine calls realloc directly, no hook). */
 #include <check.h>
+#include <limits.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -489,7 +491,9 @@ void *__wrap_realloc(void *p, size_t n) {
  * realloc counted is the engine's. */
 static void out_of_memory_anywhere(start_fn start, void *arg) {
         unsigned n = 0, n_oom = 0;
-        for (long k = 0;; k++, n++) {
+        /* under valgrind (meson test --setup valgrind) the first few: it checks memory */
+        long last = getenv("LSSD_TEST_UNDER_VALGRIND") ? 2 : LONG_MAX;
+        for (long k = 0; k <= last; k++, n++) {
                 membus *b = mixed_bus(1);
                 lss_master *w = master_default();
                 ck_assert_int_eq(start_enumerate(w, b, NULL), 0);
