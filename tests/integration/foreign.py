@@ -142,9 +142,11 @@ def test_autoassign():
         w_start = time.time()
         t.start()
         if env.real:
-            # 0.3 s into the pass: from lssd's first request of it on the wire
-            # (busctl alone may take a second to start under TCG)
-            first = env.wait_until(lambda: lssd_requests_between(env, w_start, time.time() + 1, range(256)),
+            # 0.3 s into the pass: from lssd's first Fastscan of it on the wire
+            # (busctl alone may take a second to start under TCG; lssd's switch
+            # to waiting at its start may reach candump after w_start: CI
+            # 2026-12-02 sent the other master's request before the pass began)
+            first = env.wait_until(lambda: lssd_requests_between(env, w_start, time.time() + 1, (0x51,)),
                                    timeout=60, what='the pass on the wire')
             time.sleep(max(0.0, first[0][0] + 0.3 - time.time()))
             w_foreign = time.time()
