@@ -490,10 +490,10 @@ void *__wrap_realloc(void *p, size_t n) {
  * enumeration first leaves the bus's own queues at their size: every
  * realloc counted is the engine's. */
 static void out_of_memory_anywhere(start_fn start, void *arg) {
-        unsigned n = 0, n_oom = 0;
+        unsigned n_oom = 0;
         /* under valgrind (meson test --setup valgrind) the first few: it checks memory */
         long last = getenv("LSSD_TEST_UNDER_VALGRIND") ? 2 : LONG_MAX;
-        for (long k = 0; k <= last; k++, n++) {
+        for (long k = 0; k <= last; k++) {
                 membus *b = mixed_bus(1);
                 lss_master *w = master_default();
                 ck_assert_int_eq(start_enumerate(w, b, NULL), 0);
