@@ -82,6 +82,13 @@ static bool kept(const lss_device *d) {
         return d->node_id != 0;
 }
 
+/* A slave set aside that answers with the temporary node-ID it was given:
+ * it is one of the pass's own, given 255 back at the end, no configured
+ * device. */
+static bool at_its_temporary(const lss_device *d, uint8_t node) {
+        return d->aside_node_id != 0 && node == d->aside_node_id;
+}
+
 static void add_nmt(lss_master *m, enum nmt_cs cs, uint8_t node) {
         lss_frame f;
         nmt_encode(&f, cs, node);
@@ -480,7 +487,11 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
         if (!s->bends && !s->direct && s->n_kept > 0 && !found_before(s, &s->found)) {
                 /* the slaves kept would answer an inquiry too: F's own identify */
                 STEP_RETRIED(m, &s->hpc, s->attempt, step_identify_found(m, s));
-                if (step_answered(m)) {
+                /* An identify answer only to an ask again, or late, may be a
+                 * late one of another step (it says nothing of which request
+                 * it answers): F is then asked by selection, whose answer is
+                 * F's alone, before it is announced */
+                if (step_answered(m) && s->attempt == 0 && !m->step.late) {
                         if (keep_found(s, LSS_NODE_ID_UNCONFIGURED) < 0) {
                                 master_fail(m, LSS_E_INCOMPLETE, "out of memory");
                                 goto out;
@@ -536,7 +547,14 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                         s->confirm = CONFIRM_UNCLEAR;
                 }
         }
-        if (s->confirm == CONFIRM_OK && (s->again = found_before(s, &s->found)) != NULL) {
+        if (s->confirm == CONFIRM_OK && (s->again = found_before(s, &s->found)) != NULL &&
+            at_its_temporary(s->again, s->node)) {
+                /* Set aside, and at the node-ID it was given there: it took
+                 * part no more, others' late answers made up its identity
+                 * (it answers a selection in any state). It stays set aside. */
+                s->confirm = CONFIRM_UNCLEAR;
+        }
+        if (s->confirm == CONFIRM_OK && s->again != NULL) {
                 /* Set aside, it still took part (a slave that answers
                  * Fastscan with a node-ID): keep it in configuration. Found
                  * there too, it answers in every state. */
@@ -685,8 +703,14 @@ static int reexamine_kept(lss_master *m, lss_scan_state *s) {
                         s->n_kept_bent++; /* still kept: the verdicts decide */
                         continue;
                 }
-                /* no longer kept: set aside as a new candidate, or let go (configured) */
                 s->node = m->step.answer.data[1];
+                if (at_its_temporary(&s->cand[s->x], s->node)) {
+                        /* set aside before, at its temporary node-ID: set aside again */
+                        s->cand[s->x].node_id = 0;
+                        s->n_kept--;
+                        continue;
+                }
+                /* no longer kept: set aside as a new candidate, or let go (configured) */
                 memmove(&s->cand[s->x], &s->cand[s->x + 1], (s->n_cand - s->x - 1) * sizeof(s->cand[0]));
                 s->n_cand--;
                 s->n_kept--;
@@ -779,6 +803,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
                 s->recheck = s->patient_round = false;
                 s->next_temp = LSS_NODE_ID_MAX;
+                s->hint = (lss_fastscan_known) { 0 };
                 memset(s->back_due, 0, sizeof(s->back_due));
                 memset(s->held, 0, sizeof(s->held));
                 memset(s->temp_taken, 0, sizeof(s->temp_taken));
@@ -818,7 +843,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                          * silent; one whose answers to that were lost or
                          * stalled shows as a second frame or a stray answer,
                          * which turn that off too (lss_fastscan.c, judge_lone). */
-                        s->fs = (lss_fastscan_state) { .known = s->known, .others_answer = s->n_kept_bent > 0,
+                        s->fs = (lss_fastscan_state) { .known = s->known, .hint = s->hint,
+                                                       .others_answer = s->n_kept_bent > 0,
                                                        .ping_again = s->looks > 0 };
                         /* A Scan that finds nobody says the bus is empty, and
                          * nothing checks that later: its ping may be answered by
@@ -887,6 +913,10 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 lss_loss_answered(&m->loss, s->looks, 1);
                         s->looks = 0;
                         if (!s->fs.found) {
+                                /* somebody answered the ping and was not found:
+                                 * frames of it were lost (or came late), so the
+                                 * looks for anybody left ask more often */
+                                lss_loss_answered(&m->loss, 1, 1);
                                 if (++s->failed_scans <= m->timing.cfg.retries)
                                         continue;
                                 if (recheck_first(s)) {
@@ -902,6 +932,9 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         }
                         for (unsigned i = 0; i < LSS_FIELD_COUNT; i++)
                                 lss_identity_set_field(&s->found, i, s->fs.value[i]);
+                        /* those that answered beside it are searched for below their shared bits */
+                        s->hint.value = s->found;
+                        memcpy(s->hint.known_bits, s->fs.crowd_bits, sizeof(s->hint.known_bits));
                         s->hpc = 0;
                         PT_CALL(&s->pc, handle_found(m, s));
                         if (m->result.status != LSS_OK)

@@ -13,6 +13,8 @@
  * Nothing is reported found unless all four confirmations succeeded (a
  * late answer counts, below); callers check the identity again by inquiry
  * before configuring anything. */
+#include <string.h>
+
 #include "lss/lss_internal.h"
 
 /* Every answered step narrows the slaves taking part to those that answered
@@ -62,6 +64,18 @@ static uint32_t late_latency(const lss_master *m, const lss_fastscan_state *s) {
         return l > UINT32_MAX ? UINT32_MAX : (uint32_t) l;
 }
 
+/* The early answer after a silent confirmation (or guess) is its own, late:
+ * the slaves moved on, the field is confirmed. */
+static void take_late_confirmation(lss_master *m, lss_fastscan_state *s) {
+        m->stats.late_answers++;
+        if (m->step.early)
+                step_sample(m, late_latency(m, s));
+        s->value[s->sub] = s->confirm_value;
+        s->late_confirmed = true;
+        /* a guess that held, late: guessing goes on */
+        s->guessing = s->confirm_guessed;
+}
+
 static uint32_t low_bits(int n) {
         return n >= 32 ? UINT32_MAX : (1u << n) - 1;
 }
@@ -95,7 +109,7 @@ static int check_field_read(lss_master *m, lss_fastscan_state *s) {
         s->check = CHECK_DOUBT;
         s->search_strays = m->stats.stray_answers;
         s->match_lo = s->bit;
-        s->match_hi = 32 - (int) s->known.known_bits[s->sub];
+        s->match_hi = 32 - (int) s->top;
         while (s->match_hi - s->match_lo > 1) {
                 s->watch_next = true;
                 FASTSCAN_STEP_AT(m, s, &s->check_pc,
@@ -110,7 +124,7 @@ static int check_field_read(lss_master *m, lss_fastscan_state *s) {
         }
         if (m->stats.stray_answers != s->search_strays)
                 goto out;
-        if (s->match_hi == 32 - (int) s->known.known_bits[s->sub]) {
+        if (s->match_hi == 32 - (int) s->top) {
                 /* not even the first bit, either way: nobody takes part in
                  * this field now (the confirmation before it was a
                  * straggler's, or a stalled slave's answers queue) */
@@ -173,9 +187,29 @@ static uint32_t known_prefix(const lss_fastscan_known *k, unsigned sub) {
         return lss_identity_field(&k->value, sub) & mask;
 }
 
+/* An answered step of this field read with two frames or more: another
+ * slave has the top `bits` of value[sub] too (a late answer of a step before
+ * looks the same: a hint, never a fact). */
+static void note_crowd(const lss_master *m, lss_fastscan_state *s, unsigned bits) {
+        if (step_answered(m) && m->step.n_frames >= 2 && !m->step.void_ && bits > s->crowd_bits[s->sub])
+                s->crowd_bits[s->sub] = (uint8_t) bits;
+}
+
+/* The top bits of field `sub` another slave shared with the last find, when
+ * the fields before are the last find's too: that slave is still there
+ * (it answered, and the last find took its place in the search, not it). */
+static unsigned hint_bits(const lss_fastscan_state *s) {
+        unsigned n = s->hint.known_bits[s->sub];
+        for (unsigned i = 0; n > 0 && i < s->sub; i++)
+                if (s->value[i] != lss_identity_field(&s->hint.value, i))
+                        return 0;
+        return n > 31 ? 31 : n;
+}
+
 int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         PT_BEGIN(&s->pc);
         s->found = s->none = s->silent = s->heard = false;
+        memset(s->crowd_bits, 0, sizeof(s->crowd_bits));
         s->guessing = s->n_guess > 0;
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {
                 /* from this ping on: signs of other slaves from before say nothing */
@@ -226,23 +260,50 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 } else if (s->known.known_bits[s->sub] >= 32) {
                                         s->value[s->sub] = lss_identity_field(&s->known.value, s->sub);
                                 } else {
+                                        s->top = s->known.known_bits[s->sub];
                                         s->value[s->sub] = known_prefix(&s->known, s->sub);
-                                        if (s->known.known_bits[s->sub] > 0) {
-                                                /* does anybody have the known top bits at all? */
+                                        /* Slaves that shared the last find's top bits
+                                         * are searched for below them: the steps above
+                                         * were answered by several, each with the guard
+                                         * (about log2 of the slaves left, a find). Only
+                                         * the first read of a field: a read again scans
+                                         * it whole. */
+                                        s->hinted = s->top == 0 && s->field_try == 0 && hint_bits(s) > 0;
+                                        if (s->hinted) {
+                                                s->top = hint_bits(s);
+                                                s->value[s->sub] = known_prefix(&s->hint, s->sub) &
+                                                                   ~(UINT32_MAX >> s->top);
+                                        }
+                                        if (s->top > 0) {
+                                                /* does anybody have the known top bits at all?
+                                                 * (watched as a bit step after a silent one) */
+                                                s->early_after = s->after;
+                                                s->watch_next = s->after != AFTER_ANSWER;
                                                 FASTSCAN_STEP(m, s,
                                                              lss_encode_fastscan(&f__, s->value[s->sub],
-                                                                                 (uint8_t) (32 - s->known.known_bits[s->sub]),
+                                                                                 (uint8_t) (32 - s->top),
                                                                                  (uint8_t) s->sub, (uint8_t) s->sub), true, false);
-                                                if (!step_answered(m) && s->field_try >= m->timing.cfg.retries) {
+                                                note_crowd(m, s, s->top);
+                                                if ((m->step.stale_answer || (step_answered(m) && m->step.early)) &&
+                                                    s->early_after == AFTER_SILENT_CONFIRM) {
+                                                        take_late_confirmation(m, s);
+                                                        break;
+                                                }
+                                                if (!step_answered(m) && s->hinted) {
+                                                        /* they were found meanwhile, or the hint was a
+                                                         * late answer: the whole field */
+                                                        s->top = 0;
+                                                        s->value[s->sub] = 0;
+                                                } else if (!step_answered(m) && s->field_try >= m->timing.cfg.retries) {
                                                         s->none = true;
                                                         goto out;
-                                                }
-                                                if (!step_answered(m))
+                                                } else if (!step_answered(m)) {
                                                         continue;
+                                                }
                                         }
                                         s->silent_run = 0;
                                         s->searches = 0;
-                                        for (s->bit = 31 - s->known.known_bits[s->sub]; s->bit >= 0; s->bit--) {
+                                        for (s->bit = 31 - (int) s->top; s->bit >= 0; s->bit--) {
                                                 s->early_after = s->after;
                                                 s->watch_next = s->after != AFTER_ANSWER;
                                                 FASTSCAN_STEP(m, s,
@@ -250,17 +311,11 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                                                  (uint8_t) s->bit, (uint8_t) s->sub,
                                                                                  (uint8_t) s->sub), s->bit > 0, true);
                                                 s->bit_answered = step_answered(m);
+                                                note_crowd(m, s, 32u - (unsigned) s->bit);
                                                 s->late_before = m->step.stale_answer ||
                                                                  (s->bit_answered && m->step.early);
                                                 if (s->late_before && s->early_after == AFTER_SILENT_CONFIRM) {
-                                                        /* the confirmation's late answer: confirmed */
-                                                        m->stats.late_answers++;
-                                                        if (m->step.early)
-                                                                step_sample(m, late_latency(m, s));
-                                                        s->value[s->sub] = s->confirm_value;
-                                                        s->late_confirmed = true;
-                                                        /* a guess that held, late: guessing goes on */
-                                                        s->guessing = s->confirm_guessed;
+                                                        take_late_confirmation(m, s);
                                                         break;
                                                 }
                                                 if (s->late_before && s->early_after == AFTER_SILENT_BIT) {
@@ -311,6 +366,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 if (s->check != CHECK_NOBODY) {
                                         s->confirm_pc = 0;
                                         PT_CALL(&s->pc, confirm_field(m, s));
+                                        if (!s->late_confirmed)
+                                                note_crowd(m, s, 32);
                                         if (s->late_confirmed || step_answered(m))
                                                 break;
                                         m->stats.retries++;

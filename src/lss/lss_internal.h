@@ -97,6 +97,12 @@ typedef struct lss_probe_state {
 typedef struct lss_fastscan_state {
         int pc;
         lss_fastscan_known known;
+        lss_fastscan_known hint;   /* top bits another slave shared with the last find (its crowd_bits):
+                                    * a field read starts below them when fields before match */
+        uint8_t crowd_bits[LSS_FIELD_COUNT]; /* out: top bits of value[] another slave shares too
+                                    * (an answered step of the field read had 2+ frames) */
+        unsigned top;              /* top bits of value[sub] this field read takes as given */
+        bool hinted;               /* ... from the hint */
         lss_identity guess;        /* fields [0, n_guess): tried before they are scanned */
         unsigned n_guess;
         bool guessing;             /* every field so far was a guess that held */
@@ -248,6 +254,7 @@ typedef struct lss_scan_state {
                                  * configuration: a device, no candidate */
         lss_identity last_found; /* the last slave confirmed (its fields are the next fastscan's guess) */
         lss_fastscan_known known;
+        lss_fastscan_known hint; /* enumeration: the last find and the top bits others shared with it */
         lss_identify_range range;
         lss_fastscan_state fs;
         unsigned pass, i, dropped, failed_scans, attempt, unresolved;

@@ -574,6 +574,45 @@ END_TEST
 START_TEST(enumerate_127) { enumerate_n(127, 7, false); enumerate_n(127, 8, true); }
 END_TEST
 
+/* Fastscan requests of the serial field with a bitcheck above 0 (bit
+ * steps and the checks of shared top bits). */
+static void count_serial_bit_steps(void *ud, const lss_frame *f, uint64_t t) {
+        unsigned *n = ud;
+        (void) t;
+        *n += lss_is_request(f) && f->data[0] == LSS_CS_FASTSCAN && f->data[5] > 0 && f->data[5] < 32 &&
+              f->data[6] == LSS_FIELD_SERIAL;
+}
+
+/* Slaves that answered a step beside the one found share its top bits: the
+ * next fastscan asks for those bits at once (one step) and searches below
+ * them. 16 slaves of one product whose serials differ in the low 8 bits:
+ * 496 serial bit steps before, the 24 shared bits read again for each
+ * find; 246 now (a find whose search was answered by it alone gives no
+ * hint, and the next reads the whole field). */
+START_TEST(shared_top_bits_asked_at_once) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = membus_new(125000);
+        uint64_t seed = 11;
+        for (unsigned i = 0; i < 16; i++) {
+                lss_identity id = { 0x9A, 0x3, 0x10, 0x5A3C0000u | (uint32_t) (sim_random_next(&seed) & 0xFF) };
+                if (membus_find(b, &id) == NULL)
+                        membus_add_slave(b, &id, LSS_NODE_ID_UNCONFIGURED, &f);
+        }
+        unsigned steps = 0;
+        membus_set_trace(b, count_serial_bit_steps, &steps);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->n_devices, membus_slave_count(b));
+        assert_devices_real(b, r);
+        ck_assert_msg(steps <= 300, "%u serial bit steps for %zu slaves", steps, membus_slave_count(b));
+        ck_assert(all_waiting(b));
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* Inquire Vendor..Serial by field, then Identify Remote Slave (its last
  * frame) and Configure Node-ID. */
 static void count_identity_inquiries(void *ud, const lss_frame *f, uint64_t t) {
@@ -1014,6 +1053,7 @@ int main(void) {
         tcase_add_test(tc, late_confirmation_taken);
         tcase_add_test(tc, late_answer_to_a_silent_step_is_no_sample);
         tcase_add_test(tc, late_guess_taken);
+        tcase_add_test(tc, shared_top_bits_asked_at_once);
         suite_add_tcase(s, tc);
         return run_suite(s);
 }
