@@ -791,13 +791,15 @@ static bool empty_scan(const lss_scan_state *s) {
  * lost each time is improbable (lss_loss.h). */
 static unsigned last_look(const lss_master *m, const lss_scan_state *s) {
         unsigned base = finds_of(s) > 0 || s->pinged ? m->timing.cfg.retries + 1u : empty_scan(s) ? 2u : 1u;
-        return lss_loss_asks(&m->loss, 1, base) - 1u;
+        unsigned all = lss_loss_asks(&m->loss, 1, base), pings = lss_loss_asks(&s->ping_loss, 1, base);
+        return (all > pings ? all : pings) - 1u;
 }
 
 int proc_enumerate(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
         s->deadline = m->now + lss_enumerate_deadline_us(&m->timing.cfg);
         s->misbehaving = s->nobody = s->pinged = false;
+        s->ping_loss = (lss_loss) { 0 };
         for (s->pass = 0; s->pass <= m->timing.cfg.retries; s->pass++) {
                 s->n_cand = s->n_direct = s->n_aside = s->n_kept = s->n_kept_bent = 0;
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
@@ -877,8 +879,18 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 /* a ping answered, a later one silent: a slave went
                                  * into configuration on an answer that came late,
                                  * uncounted; the looks for nobody begin again */
-                                if (s->fs.heard && s->fs.silent)
+                                if (s->fs.heard && s->fs.silent) {
                                         s->looks = 0;
+                                        /* with no confirmation of the last field out, no
+                                         * slave went into configuration: a ping was lost */
+                                        if (!s->fs.sent_last)
+                                                lss_loss_answered(&s->ping_loss, 1, 1);
+                                }
+                                /* A silent look is no round that found nobody new:
+                                 * the looks have their own bound, last_look(), which
+                                 * frame loss raises beyond the rounds' margin */
+                                if (s->fs.silent && !s->fs.heard)
+                                        s->rounds--;
                                 /* (a pass that found nobody, e.g. the map's devices
                                  * all handled, asks once, as an empty bus costs;
                                  * not when a ping was answered: a slave is there) */
@@ -909,8 +921,12 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                                 }
                                 continue;
                         }
-                        if (s->looks > 0) /* a silent ping was wrong: lost, or somebody uncounted */
+                        if (s->looks > 0) { /* a silent ping was wrong: lost, or somebody uncounted */
                                 lss_loss_answered(&m->loss, s->looks, 1);
+                                lss_loss_answered(&s->ping_loss, s->looks, 1);
+                        } else {
+                                lss_loss_answered(&s->ping_loss, 0, 1);
+                        }
                         s->looks = 0;
                         if (!s->fs.found) {
                                 /* somebody answered the ping and was not found:

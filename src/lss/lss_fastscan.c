@@ -151,6 +151,7 @@ out:;
  * slaves moved on with the confirmation: confirmed. */
 static int confirm_field(lss_master *m, lss_fastscan_state *s) {
         PT_BEGIN(&s->confirm_pc);
+        s->sent_last = s->sent_last || s->sub == LSS_FIELD_COUNT - 1;
         for (;;) {
                 s->confirm_after = s->after;
                 s->watch_next = s->after != AFTER_ANSWER;
@@ -208,7 +209,7 @@ static unsigned hint_bits(const lss_fastscan_state *s) {
 
 int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         PT_BEGIN(&s->pc);
-        s->found = s->none = s->silent = s->heard = false;
+        s->found = s->none = s->silent = s->heard = s->sent_last = false;
         memset(s->crowd_bits, 0, sizeof(s->crowd_bits));
         s->guessing = s->n_guess > 0;
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {

@@ -112,6 +112,8 @@ typedef struct lss_fastscan_state {
         bool found, none;          /* outcome: one slave in configuration / nobody there */
         bool silent;               /* none because nobody answered the ping: no slave is non-configured */
         bool heard;                /* a ping of this fastscan was answered */
+        bool sent_last;            /* ... and a confirmation of the last field went out: a slave
+                                    * may be in configuration, its answer late */
         uint32_t ping_late_us;     /* nonzero: the ping's late guard (lss_step.late_us) */
         bool ping_again;           /* the ping repeats one that waited the timeout in silence:
                                     * it waits as an answered step would (not first contact) */
@@ -241,6 +243,8 @@ typedef struct lss_scan_state {
         unsigned n_other;           /* how often that happened in this pass */
         unsigned looks;             /* silent fastscan pings in a row, each after a switch to waiting */
         bool pinged;                /* a fastscan ping of this enumeration was answered */
+        lss_loss ping_loss;         /* its pings alone: one slave that loses frames shows here,
+                                     * undiluted by the answered steps of every other slave */
         enum lss_confirm confirm;
         uint8_t node, temp, next_temp;
         bool node_lone;         /* `node` was inquired from one frame in the full guard */

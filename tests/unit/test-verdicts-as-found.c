@@ -713,14 +713,19 @@ static const lss_result *autoassign_no_silent_miss(lss_master *m, membus *b, con
  * but the pass ends with its verdict: before, the verdict was dropped and
  * the pass said OK with the slave never reached (9, 10 and 10 of the 10
  * seeds of the plans; the slave without Inquire Node-ID in each plan).
- * Healed, the next pass reaches every slave. */
+ * And the looks for anybody left at the end of a pass ask as often as
+ * the pings' own loss says: 3 of 100 seeds of the blind plan (38, 44, 71)
+ * ended "done" with the slave never reached, its pings to the last look
+ * lost, when a ping answered and a retry's ping silent were no sign of
+ * loss. Healed, the next pass reaches every slave. */
 START_TEST(autoassign_enumeration_verdict_kept) {
         static const lss_identity no_inquire = { 0x66, 0x6, 0x2, 0x6602 };
+        const uint64_t seeds = getenv("LSSD_TEST_UNDER_VALGRIND") ? 10 : 100;
         for (int plan = 0; plan < 3; plan++) {
                 lss_autoassign_plan p = verdict_plan(plan);
                 unsigned said = 0;
                 char what[64];
-                for (uint64_t seed = 1; seed <= 10; seed++) {
+                for (uint64_t seed = 1; seed <= seeds; seed++) {
                         membus *b = mixed_bus(seed);
                         membus_slave(b, 0)->faults.rx_loss_ppm = 300000;
                         lss_master *m = master_default();
