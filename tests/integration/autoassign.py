@@ -501,7 +501,11 @@ def test_crash_restart():
     # full identities: each device is selected directly, the pass is short
     mapping = [(s.serial, 40 + i, R) for i, s in enumerate(slaves)]
     cfg = config('vcan0', mapping, vendor=hex(V), product=hex(P), auto_assign=True)
-    env = Env({'vcan0': slaves}, config=cfg, candump=True, notify=True)
+    # Slaves answering in 15 ms (lssd at its default timing) make the pass
+    # last about a second: at 2 ms it could end before the harness, polling
+    # candump, saw its first Configure Node-ID and killed lssd (CI
+    # 2026-12-02: "the pass ended before the kill").
+    env = Env({'vcan0': slaves}, config=cfg, candump=True, notify=True, sim_args=['--latency', '15'])
     if not env.real:
         raise Skip('the simulated bus dies with lssd')
     with env:
