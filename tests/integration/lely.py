@@ -105,14 +105,7 @@ def test_pool():
         # one Configure Node-ID of the pool per device (before: 71 into each of the four)
         # (the same Configure asked again before another selection is one:
         # a silent or stalled answer is asked again, CI 2026-12-02)
-        pool_ids, last = [], None
-        for f in env.lss_frames('vcan0'):
-            if f[1] != 0x7E5:
-                continue
-            if f[2][0] == CS_CONFIGURE_NODE_ID and 71 <= f[2][1] <= 90 and f[2] != last:
-                pool_ids.append(f[2][1])
-            last = f[2] if f[2][0] == CS_CONFIGURE_NODE_ID else None
-        pool_ids.sort()
+        pool_ids = sorted(n for n in env.configure_node_ids('vcan0') if 71 <= n <= 90)
         expect_eq(pool_ids, sorted(given.values()), 'Configure Node-ID to the pool on the wire')
         expect(all_waiting(env, 'vcan0', LELY), 'a slave left in configuration')
         expect(PENDING in env.lssd_output(), 'the journal says it')

@@ -504,6 +504,19 @@ class Env:
     def lss_frames(self, ifname):
         return [f for f in self.frames(ifname) if f[1] in (0x7E4, 0x7E5)]
 
+    def configure_node_ids(self, ifname, start=0):
+        """The node-IDs of the Configure Node-ID requests on ifname (from its
+        LSS frame `start` on), as devices were given them: the same request
+        asked again right after itself (its answer silent or stalled) is one."""
+        ids, last = [], None
+        for f in self.lss_frames(ifname)[start:]:
+            if f[1] != 0x7E5:
+                continue
+            if f[2][0] == 0x11 and f[2] != last:
+                ids.append(f[2][1])
+            last = f[2] if f[2][0] == 0x11 else None
+        return ids
+
     def slave_state(self, ifname, serial):
         name = '%08x.state' % serial
         dirs = [d for k, d in self.state_dirs.items() if k == ifname or k.startswith(ifname + '+')]
