@@ -162,7 +162,7 @@ typedef struct lss_assign_state {
         lss_fastscan_state fs;
         int vpc, gpc;           /* proc_assign_unverified, proc_give_back */
         uint8_t held;           /* the node-ID the slave answered Inquire Node-ID with there */
-        bool patient;           /* proc_assign_unverified made the waits patient (and ends it) */
+        bool patient;           /* proc_assign_unverified, unassign's last round made the waits patient (and end it) */
         uint64_t until;         /* unassign: the reset slave must answer 255 by then */
         uint8_t seen;           /* unassign: the node-ID it answered after the reset (0: none) */
         bool configuring;       /* Configure Node-ID node_id went out, the assignment is not over:
@@ -267,6 +267,10 @@ typedef struct lss_scan_state {
         size_t n_before_gaps;   /* slowscan: slaves found before the last of those */
         bool heard;             /* slowscan: some range answered */
         bool gap_heard;         /* slowscan: a range between the slaves found answered in the last look */
+        bool patient_ask;       /* slowscan: this range is asked with patient waits (a verdict) */
+        bool silent_before;     /* slowscan: nobody answered the step before */
+        bool misheard;          /* slowscan: a range answered and neither half did, or a slave
+                                 * singled out did not verify: answers went to the wrong step */
         /* slowscan: stack of intervals still to query */
         lss_range_item *stack, cur;
         size_t n_stack, cap_stack;

@@ -74,8 +74,11 @@ static lss_range_item parent_of(const lss_range_item *hi) {
         return p;
 }
 
-/* The candidate just found did not verify: counted, the first one named. */
+/* The candidate just found did not verify (no answer to the selective
+ * switch or to Inquire Node-ID): counted, the first one named, and the
+ * scan's later verdicts wait patiently. */
 static void drop(lss_scan_state *s) {
+        s->misheard = true;
         if (s->dropped++ == 0)
                 s->dropped_id = s->cand[s->n_cand - 1].id;
 }
@@ -104,6 +107,7 @@ static int verify_candidate(lss_master *m, lss_scan_state *s) {
                 STEP_RETRIED(m, &s->vpc, s->attempt, step_identify_item(m, s, &s->cur));
                 if (!step_answered(m)) {
                         s->n_cand--;
+                        s->misheard = true;
                         goto out;
                 }
                 lss_timing_on_stray(&m->timing);
@@ -117,6 +121,9 @@ static int verify_candidate(lss_master *m, lss_scan_state *s) {
         }
         REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                         LSS_CS_INQUIRE_NODE_ID);
+        /* selected, it is there: its silence now would drop it */
+        AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->vpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                                     LSS_CS_INQUIRE_NODE_ID));
         if (step_answered(m) && !step_conflict(m)) {
                 lss_device *c = &s->cand[s->n_cand - 1];
                 c->node_id = m->step.answer.data[1];
@@ -193,6 +200,7 @@ static unsigned gap_asks(const lss_master *m) {
 
 int proc_slowscan(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->pc);
+        s->misheard = s->silent_before = false;
         s->n_cand = s->n_stack = 0;
         s->unresolved = s->dropped = 0;
         m->n_devices = 0;
@@ -207,9 +215,32 @@ int proc_slowscan(lss_master *m, lss_scan_state *s) {
 again:
         while (s->n_stack > 0) {
                 s->cur = s->stack[--s->n_stack];
+                /* A range asked again because its halves were silent: its
+                 * silence now drops a slave that answered it, maybe held
+                 * back by a stalled host far beyond the adaptive waits. So
+                 * does a gap's, the last look, once answers in this scan
+                 * went to the wrong step: a host or bus that holds them
+                 * back (late ones are taken for the step they fall in). */
+                s->patient_ask = (s->cur.confirm || (s->cur.gap && s->misheard)) && !m->patient;
+                if (s->patient_ask)
+                        master_patient_begin(m, lss_timing_patient_wait(&m->timing, LSS_VERDICT_WAIT_FLOOR_US));
                 step_identify_item(m, s, &s->cur);
                 m->step.discovery = s->i++ == 0;
+                m->step.watch_early = s->silent_before;
                 PT_YIELD(&s->pc);
+                if (s->patient_ask)
+                        master_patient_end(m);
+                s->silent_before = !step_answered(m);
+                if (step_answered(m) && m->step.early) {
+                        /* sooner than slaves answer, after a silent step: that
+                         * step's late answer, likely, not this range's. Asked
+                         * again (the silent one may have been dropped: the
+                         * verdicts after a mix-up are patient) */
+                        s->misheard = true;
+                        s->stack[s->n_stack++] = s->cur;
+                        m->stats.retries++;
+                        continue;
+                }
                 if (!step_answered(m) && (s->cur.gap || s->cur.confirm)) {
                         /* silent twice like any half (a gap 1 + retries
                          * times, more when the scan lost frames: it is the
@@ -236,6 +267,7 @@ again:
                                  * next: the range is asked again, and split
                                  * again only if it answers. */
                                 lss_range_item p = parent_of(&s->cur);
+                                s->misheard = true;
                                 p.rechecks = s->cur.rechecks + 1;
                                 p.confirm = true;
                                 if (s->cur.rechecks >= m->timing.cfg.retries)
@@ -296,7 +328,7 @@ again:
                 if (s->dropped > 0)
                         master_fail(m, LSS_E_INCOMPLETE,
                                     "%u ranges answered identify each time but neither half did (not CiA 305, or "
-                                    "answers lost); %u slaves answered identify but not the selective switch (%s%08x:%08x:"
+                                    "answers lost); %u slaves answered identify, then not the selective switch or Inquire Node-ID (%s%08x:%08x:"
                                     "%08x:%08x)", s->unresolved, s->dropped, s->dropped > 1 ? "first " : "",
                                     s->dropped_id.vendor, s->dropped_id.product, s->dropped_id.revision,
                                     s->dropped_id.serial);
@@ -306,7 +338,7 @@ again:
                                     "answers lost)", s->unresolved);
         } else if (s->dropped > 0)
                 master_fail(m, LSS_E_INCOMPLETE,
-                            "%u slaves answered identify but not the selective switch (%s%08x:%08x:%08x:%08x)",
+                            "%u slaves answered identify, then not the selective switch or Inquire Node-ID (%s%08x:%08x:%08x:%08x)",
                             s->dropped, s->dropped > 1 ? "first " : "", s->dropped_id.vendor, s->dropped_id.product,
                             s->dropped_id.revision, s->dropped_id.serial);
         goto out;

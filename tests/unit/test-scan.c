@@ -3,6 +3,7 @@
  * slaves of one vendor/product, each verified, nothing changed. Both scans
  * keep every slave when frames are lost on the way to the slaves. */
 #include <stdio.h>
+#include <stdlib.h>
 
 #include "engine-util.h"
 
@@ -231,7 +232,7 @@ END_TEST
 START_TEST(stalls_name_nobody) {
         for (uint64_t seed = 500; seed < 530; seed++) {
                 lss_slave_faults f = faults_latency(1000, 300);
-                f.spike_ppm = 20000;
+                f.spike_ppm = 50000;
                 f.spike_us = 8000;
                 membus *b = bus_random(12, seed, 0x9A, 3, &f);
                 lss_master *m = master_default();
@@ -325,7 +326,7 @@ START_TEST(slowscan_unresolved_and_unverifiable) {
         const lss_result *res = slowscan_driven(m, b, NULL, NULL);
         ck_assert_int_eq(res->status, LSS_E_INCOMPLETE);
         ck_assert_msg(strstr(res->message, "ranges answered identify each time but neither half did") &&
-                              strstr(res->message, "; 1 slaves answered identify but not the selective switch"),
+                              strstr(res->message, "; 1 slaves answered identify, then not the selective switch"),
                       "%s", res->message);
         lss_master_free(m);
         membus_free(b);
@@ -446,6 +447,50 @@ START_TEST(progress_reported) {
 }
 END_TEST
 
+/* A slowscan on a loaded host (CI 2026-12-02, test reload: a Scan of a
+ * vendor's configured devices in a VM under load ended "1 slaves answered
+ * identify but not the selective switch"): the answers of 4 configured
+ * slaves 20-200 ms late on 2 % of them, each stall holding back the
+ * slave's later answers. A late answer falls in a later step and is taken
+ * for that range's; the range it answered was silent twice and dropped.
+ * Before, 147 of these 200 seeds missed a slave, most ending "OK" without
+ * it. Now a step right after a silent one judges an answer sooner than any
+ * slave answers as that one's (asked again), and the asks whose silence
+ * drops a slave wait patiently: the range asked again after its halves
+ * were silent, the gaps once answers went astray, the Inquire Node-ID of
+ * a slave selected. */
+#define STALL_SEEDS (getenv("LSSD_TEST_UNDER_VALGRIND") ? 10u : 200u)
+
+START_TEST(slowscan_through_stalls) {
+        static const uint32_t stall_us[] = { 20000, 50000, 100000, 200000 };
+        unsigned failed = 0;
+        for (uint64_t seed = 0; seed < STALL_SEEDS; seed++) {
+                lss_slave_faults f = faults_latency(700, 300);
+                f.spike_us = stall_us[seed % 4];
+                f.spike_ppm = 20000;
+                membus *b = bus_random(4, seed, 0xEC, 0x1234, &f);
+                for (size_t i = 0; i < 4; i++) {
+                        lss_slave_state *st = &membus_slave(b, i)->st;
+                        st->active_node_id = st->pending_node_id = st->stored_node_id = (uint8_t) (20 + i);
+                }
+                lss_master *m = master_default();
+                const lss_result *r = slowscan_driven(m, b, NULL, NULL);
+                if (r->status != LSS_OK || r->n_devices != 4) {
+                        fprintf(stderr, "seed %u (%u ms stalls): %zu found: %s\n", (unsigned) seed,
+                                (unsigned) (f.spike_us / 1000), r->n_devices, r->message);
+                        failed++;
+                } else {
+                        assert_devices_real(b, r);
+                }
+                lss_drive_idle(b, 300000);
+                ck_assert(all_waiting(b));
+                lss_master_free(m);
+                membus_free(b);
+        }
+        ck_assert_uint_eq(failed, 0);
+}
+END_TEST
+
 int main(void) {
         Suite *s = suite_create("scan");
         TCase *tc = tcase_create("slowscan");
@@ -466,6 +511,7 @@ int main(void) {
         tcase_add_test(tc, found_announced_early);
         tcase_add_test(tc, stalls_name_nobody);
         tcase_add_test(tc, slowscan_late_and_lost);
+        tcase_add_test(tc, slowscan_through_stalls);
         tcase_add_loop_test(tc, stalls_on_a_full_bus, 0, sizeof(stall_cases) / sizeof(stall_cases[0]));
         suite_add_tcase(s, tc);
         return run_suite(s);
