@@ -27,18 +27,27 @@ static bool one_answer(const lss_master *m) {
 int proc_give_back(lss_master *m, lss_assign_state *s) {
         PT_BEGIN(&s->gpc);
         m->result.may_hold = true;
+        /* (patient already from proc_assign_unverified; after a reset pass not) */
         REQUEST_RETRIED(m, &s->gpc, s->attempt, lss_encode_configure_node_id(&f__, s->old),
                         LSS_CS_CONFIGURE_NODE_ID);
+        AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->gpc, s->attempt,
+                                                     lss_encode_configure_node_id(&f__, s->old),
+                                                     LSS_CS_CONFIGURE_NODE_ID));
         if (!one_answer(m) || m->step.answer.data[1] != LSS_ERR_OK)
                 goto out;
         if (s->flags & LSS_ASSIGN_STORE) {
                 REQUEST_RETRIED(m, &s->gpc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
+                AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->gpc, s->attempt, lss_encode_store(&f__),
+                                                             LSS_CS_STORE));
                 /* a device that cannot store kept nothing of N either */
                 if (!one_answer(m) || (m->step.answer.data[1] != LSS_ERR_OK &&
                                        m->step.answer.data[1] != LSS_ERR_STORE_NOT_SUPPORTED))
                         goto out;
         }
         REQUEST_RETRIED(m, &s->gpc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT), LSS_CS_INQUIRE_NODE_ID);
+        AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->gpc, s->attempt,
+                                                     lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                                     LSS_CS_INQUIRE_NODE_ID));
         if (!one_answer(m))
                 goto out;
         s->held = m->step.answer.data[1];

@@ -78,7 +78,9 @@ int aa_proc_reset_pending(lss_master *m, lss_aa_state *s) {
                 m->as.old = s->out[s->k].old_node_id;
                 m->as.flags = s->plan->store ? LSS_ASSIGN_STORE : 0;
                 m->result.given_back = false;
+                /* silent, it keeps what it was given (may_hold): asked patiently */
                 SELECT_RETRIED(m, &s->r_pc, m->as.attempt, &m->as.id);
+                AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->r_pc, m->as.attempt, &m->as.id));
                 if (step_answered(m)) {
                         m->as.gpc = 0;
                         PT_CALL(&s->r_pc, proc_give_back(m, &m->as));

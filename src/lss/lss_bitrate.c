@@ -89,7 +89,10 @@ static int reach_all(lss_master *m, lss_bitrate_state *s) {
         PT_BEGIN(&s->cpc);
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 progress(m, s, 0);
+                /* every silence before the activation ends the change: a
+                 * verdict, asked again patiently first (a stalled host) */
                 SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id);
+                AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id));
                 s->p.devices[s->i].outcome = step_answered(m) ? LSS_BITRATE_REACHED : LSS_BITRATE_UNREACHABLE;
                 s->n_bad += !step_answered(m);
                 SEND(m, &s->cpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
@@ -110,6 +113,7 @@ static int configure_each(lss_master *m, lss_bitrate_state *s) {
                 lss_bitrate_device *d = &s->p.devices[s->i];
                 progress(m, s, 1);
                 SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id);
+                AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id));
                 d = &s->p.devices[s->i];
                 if (!step_answered(m)) {
                         d->outcome = LSS_BITRATE_UNREACHABLE;
@@ -121,6 +125,9 @@ static int configure_each(lss_master *m, lss_bitrate_state *s) {
                 s->configuring = true;
                 REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_configure_bit_timing(&f__, 0, s->index),
                                 LSS_CS_CONFIGURE_BIT_TIMING);
+                AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->cpc, s->attempt,
+                                                             lss_encode_configure_bit_timing(&f__, 0, s->index),
+                                                             LSS_CS_CONFIGURE_BIT_TIMING));
                 s->configuring = false;
                 d = &s->p.devices[s->i];
                 if (!step_answered(m) || step_conflict(m))
@@ -255,6 +262,8 @@ static int verify_each(lss_master *m, lss_bitrate_state *s) {
                 s->p.devices[s->i].outcome = LSS_BITRATE_SWITCHED;
                 if (s->p.store) {
                         REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_store(&f__), LSS_CS_STORE);
+                        AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_store(&f__),
+                                                                     LSS_CS_STORE));
                         if (step_answered(m) && m->step.answer.data[1] == 0)
                                 s->p.devices[s->i].outcome = LSS_BITRATE_STORED;
                         else {
@@ -298,12 +307,17 @@ static int revert(lss_master *m, lss_bitrate_state *s) {
         for (s->i = 0; s->i < s->p.n_devices; s->i++) {
                 if (s->p.devices[s->i].outcome != LSS_BITRATE_CONFIGURED && s->unsure != s->i + 1)
                         continue;
-                step_selective(m, &s->p.devices[s->i].id);
-                PT_YIELD(&s->cpc);
+                /* a device not reverted keeps the new timing (a later Store
+                 * persists it): asked again, patiently when silent */
+                SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id);
+                AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->cpc, s->attempt, &s->p.devices[s->i].id));
                 if (!step_answered(m))
                         continue;
-                STEP_REQUEST(m, &s->cpc, lss_encode_configure_bit_timing(&f__, 0, s->old_index),
-                             LSS_CS_CONFIGURE_BIT_TIMING);
+                REQUEST_RETRIED(m, &s->cpc, s->attempt, lss_encode_configure_bit_timing(&f__, 0, s->old_index),
+                                LSS_CS_CONFIGURE_BIT_TIMING);
+                AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->cpc, s->attempt,
+                                                             lss_encode_configure_bit_timing(&f__, 0, s->old_index),
+                                                             LSS_CS_CONFIGURE_BIT_TIMING));
                 /* the unsure one keeps its outcome (silent, or none for a conflict) */
                 if (step_answered(m) && !step_conflict(m) && m->step.answer.data[1] == 0 &&
                     s->p.devices[s->i].outcome == LSS_BITRATE_CONFIGURED)

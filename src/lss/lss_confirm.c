@@ -23,10 +23,17 @@ static int proc_confirm(lss_master *m, lss_scan_state *s) {
                 s->found = s->cand[s->i].id;
                 s->cpc = 0;
                 PT_CALL(&s->pc, proc_confirm_by_selection(m, s));
-                if (s->confirm == CONFIRM_NOBODY)
+                /* silent, the device is left out: asked again patiently */
+                AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->pc, s->attempt, &s->found));
+                if (!step_answered(m))
                         continue;
                 REQUEST_RETRIED(m, &s->pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_COUNT),
                                 LSS_CS_INQUIRE_NODE_ID);
+                /* selected, it is there: silent now, or answered by a late
+                 * answer of the one before too, it would be left out */
+                AGAIN_PATIENTLY_IF_UNCLEAR(m, REQUEST_RETRIED(m, &s->pc, s->attempt,
+                                                             lss_encode_inquire(&f__, LSS_FIELD_COUNT),
+                                                             LSS_CS_INQUIRE_NODE_ID));
                 if (!step_answered(m) || step_conflict(m))
                         continue;
                 s->cand[s->i].node_id = m->step.answer.data[1];

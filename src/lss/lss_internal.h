@@ -342,6 +342,9 @@ struct lss_master {
         /* master_patient_begin(): the configured timing, back at _end */
         lss_timing_config calm_cfg;
         bool patient;
+        /* AGAIN_PATIENTLY_IF: its first ask follows the same request, asked
+         * in vain, whose late answer it may get (lss_step.watch_early) */
+        bool asking_again;
 
         lss_result result;
         lss_device *devices;
@@ -415,7 +418,7 @@ bool step_conflict(const lss_master *m);
 #define STEP_RETRIED_UP_TO(m, pc, attempt, most, start_stmt) \
         for ((attempt) = 0;; (attempt)++) { \
                 start_stmt; \
-                (m)->step.watch_early = (attempt) > 0; \
+                (m)->step.watch_early = (attempt) > 0 || (m)->asking_again; \
                 PT_YIELD(pc); \
                 if (step_answered(m)) { \
                         lss_loss_answered(&(m)->loss, (attempt), (m)->step.n_tx); \
@@ -459,10 +462,17 @@ void master_patient_end(lss_master *m);
  * waits when silent (only requests that may be repeated: an inquiry, the
  * same Configure or Store): a stalled host holds answers back 100-200 ms,
  * far beyond any timeout. */
-#define AGAIN_PATIENTLY_IF_SILENT(m, step_stmt) \
-        if (!step_answered(m) && !(m)->patient) { \
+#define AGAIN_PATIENTLY_IF_SILENT(m, step_stmt) AGAIN_PATIENTLY_IF(m, !step_answered(m), step_stmt)
+/* ... and a request of one slave alone in configuration answered twice
+ * differently: a late answer of a slave asked before came too */
+#define AGAIN_PATIENTLY_IF_UNCLEAR(m, step_stmt) \
+        AGAIN_PATIENTLY_IF(m, !step_answered(m) || step_conflict(m), step_stmt)
+#define AGAIN_PATIENTLY_IF(m, cond, step_stmt) \
+        if ((cond) && !(m)->patient) { \
                 master_patient_begin(m, lss_timing_patient_wait(&(m)->timing, LSS_VERDICT_WAIT_FLOOR_US)); \
+                (m)->asking_again = true; \
                 step_stmt; \
+                (m)->asking_again = false; \
                 master_patient_end(m); \
         }
 

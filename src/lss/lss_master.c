@@ -247,7 +247,7 @@ void master_patient_begin(lss_master *m, uint32_t wait_us) {
 void master_patient_end(lss_master *m) {
         if (m->patient)
                 m->timing.cfg = m->calm_cfg;
-        m->patient = false;
+        m->patient = m->asking_again = false;
 }
 
 static int start_op(lss_master *m, lss_proc_fn proc, bool procedure, uint64_t now) {

@@ -21,7 +21,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from lssdtest import (BUS_IFACE, DEVICE_IFACE, MANAGER, MANAGER_IFACE, SERVICE, SOURCE_ROOT, Env, Skip, Slave,  # noqa: E402
-                      auto_assign,
+                      auto_assign, configure_node_ids,
                       bus_path, device_path, log, run, unit_exec_start)
 
 B0 = bus_path('vcan0')
@@ -84,7 +84,7 @@ def assigning_configures(frames):
     """Configure Node-ID requests other than the enumeration's own: it sets
     each non-configured slave it finds aside with a volatile node-ID from 127
     down (above what these tests map) and gives it 255 back, one for one."""
-    nodes = [f[2][1] for f in lssd_lss(frames) if f[2][0] == CS_CONFIGURE_NODE_ID]
+    nodes = configure_node_ids(frames)
     aside = [n for n in nodes if SET_ASIDE_FLOOR <= n < 255]
     expect_eq(nodes.count(255), len(aside), 'node-ID 255 given back for each temporary node-ID %r' % aside)
     return [n for n in nodes if n < SET_ASIDE_FLOOR]

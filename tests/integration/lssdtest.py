@@ -140,6 +140,20 @@ class BusctlResult:
         return 'busctl rc=%d error=%s (%s) out=%r' % (self.rc, self.error_name, self.error_message, self.stdout)
 
 
+def configure_node_ids(frames):
+    """The node-IDs of the Configure Node-ID requests among (time, id, data)
+    frames, as devices were given them: the same request asked again right
+    after itself (its answer silent or stalled) is one."""
+    ids, last = [], None
+    for f in frames:
+        if f[1] != 0x7E5:
+            continue
+        if f[2][0] == 0x11 and f[2] != last:
+            ids.append(f[2][1])
+        last = f[2] if f[2][0] == 0x11 else None
+    return ids
+
+
 class Env:
     """One private bus, lss-sim per interface, one lssd."""
 
@@ -505,17 +519,8 @@ class Env:
         return [f for f in self.frames(ifname) if f[1] in (0x7E4, 0x7E5)]
 
     def configure_node_ids(self, ifname, start=0):
-        """The node-IDs of the Configure Node-ID requests on ifname (from its
-        LSS frame `start` on), as devices were given them: the same request
-        asked again right after itself (its answer silent or stalled) is one."""
-        ids, last = [], None
-        for f in self.lss_frames(ifname)[start:]:
-            if f[1] != 0x7E5:
-                continue
-            if f[2][0] == 0x11 and f[2] != last:
-                ids.append(f[2][1])
-            last = f[2] if f[2][0] == 0x11 else None
-        return ids
+        """configure_node_ids() of ifname's LSS frames from `start` on."""
+        return configure_node_ids(self.lss_frames(ifname)[start:])
 
     def slave_state(self, ifname, serial):
         name = '%08x.state' % serial

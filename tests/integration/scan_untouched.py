@@ -19,7 +19,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bitrate import expect, expect_eq  # noqa: E402
-from lssdtest import BUS_IFACE, Env, Skip, Slave, bus_path, log, run  # noqa: E402
+from lssdtest import BUS_IFACE, Env, Skip, Slave, bus_path, configure_node_ids, log, run  # noqa: E402
 
 B0 = bus_path('vcan0')
 CONFIG = 'buses = ( { interface = "vcan0"; bitrate = 125000; } );\n'
@@ -63,8 +63,7 @@ def test_bent():
     slaves = [Slave(0xEC, 0x1234, 1, 0x100 + i) for i in range(4)]
     slaves += [Slave(0x55, 0x1, 2, 0x500 + i, profile='canopennode') for i in range(2)]
     frames, before, after = scan(slaves)
-    temporary = [f[2][1] for f in frames if f[1] == 0x7E5 and f[2][:1] == bytes([CS_CONFIGURE_NODE_ID]) and
-                 f[2][1] != 255]
+    temporary = [n for n in configure_node_ids(frames) if n != 255]
     log('temporary node-IDs on the bus: %r' % temporary)
     expect(len(temporary) <= 2, 'at most 2 Configure Node-ID other than 255: %r' % temporary)
     for s in slaves:

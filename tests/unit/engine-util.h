@@ -4,6 +4,7 @@
 
 #include <check.h>
 #include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -100,6 +101,41 @@ static inline void assert_devices_real(membus *b, const lss_result *r) {
                 for (size_t j = 0; j < i; j++)
                         ck_assert(!lss_identity_equal(&r->devices[i].id, &r->devices[j].id));
         }
+}
+
+/* A loaded host, seed by seed: each slave's answers 20, 50, 100 or 200 ms
+ * late (by seed) on `ppm` per million of them; a stall holds back the
+ * slave's later answers too (one transmit queue). */
+static inline uint32_t stall_us_of(uint64_t seed) {
+        static const uint32_t stall_us[] = { 20000, 50000, 100000, 200000 };
+        return stall_us[seed % 4];
+}
+
+static inline void faults_stall(lss_slave_faults *f, uint64_t seed, uint32_t ppm) {
+        f->spike_us = stall_us_of(seed);
+        f->spike_ppm = ppm;
+}
+
+/* A seed's failure over stalls: said on stderr (the seed and its stall, so
+ * that it can be traced) and counted; the test asserts the count at the end. */
+static inline void stall_failed(unsigned *failed, uint64_t seed, const lss_slave_faults *f, const char *what) {
+        fprintf(stderr, "seed %u (%u ms stalls): %s\n", (unsigned) seed, (unsigned) (f->spike_us / 1000), what);
+        (*failed)++;
+}
+
+/* ... a result that should hold all `n` slaves of the bus: OK, each real;
+ * every slave ends in waiting. */
+static inline void stall_expect_found(unsigned *failed, uint64_t seed, const lss_slave_faults *f, membus *b,
+                                      const lss_result *r, size_t n) {
+        if (r->status != LSS_OK || r->n_devices != n) {
+                char what[500];
+                snprintf(what, sizeof(what), "%zu of %zu found: %s", r->n_devices, n, r->message);
+                stall_failed(failed, seed, f, what);
+        } else {
+                assert_devices_real(b, r);
+        }
+        lss_drive_idle(b, 300000);
+        ck_assert(all_waiting(b));
 }
 
 /* What lss_master_set_found() announced, and when (virtual time, LSS

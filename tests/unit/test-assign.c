@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: LGPL-2.1-or-later */
 /* Giving node-IDs: by known identity (selective switch) and by fastscan. */
 #include <inttypes.h>
-#include <stdio.h>
 
 #include "engine-util.h"
 
@@ -719,13 +718,11 @@ END_TEST
  * answer" on a slave that was there. A silence that ends in a verdict is
  * asked again patiently, as the assignment does. */
 START_TEST(unassign_through_stalls) {
-        static const uint32_t stall_us[] = { 20000, 50000, 100000, 200000 };
         lss_master *m = master_default();
         unsigned failed = 0;
         for (uint64_t seed = 0; seed < 400; seed++) {
                 lss_slave_faults f = faults_latency(700, 300);
-                f.spike_us = stall_us[seed % 4];
-                f.spike_ppm = 100000;
+                faults_stall(&f, seed, 100000);
                 membus *b = membus_new(125000);
                 membus_set_seed(b, seed);
                 membus_add_slave(b, &ID1, 9, &f);
@@ -738,13 +735,10 @@ START_TEST(unassign_through_stalls) {
                                                              membus_now(b)), 0);
                         r = run(m, b);
                 }
-                if (r->status != LSS_OK) {
-                        fprintf(stderr, "seed %u (%u ms stalls): %s\n", (unsigned) seed,
-                                (unsigned) (f.spike_us / 1000), r->message);
-                        failed++;
-                } else {
+                if (r->status != LSS_OK)
+                        stall_failed(&failed, seed, &f, r->message);
+                else
                         ck_assert_uint_eq(membus_slave(b, 0)->st.active_node_id, 0xFF);
-                }
                 ck_assert(all_waiting(b));
                 membus_free(b);
         }

@@ -462,28 +462,17 @@ END_TEST
 #define STALL_SEEDS (getenv("LSSD_TEST_UNDER_VALGRIND") ? 10u : 200u)
 
 START_TEST(slowscan_through_stalls) {
-        static const uint32_t stall_us[] = { 20000, 50000, 100000, 200000 };
         unsigned failed = 0;
         for (uint64_t seed = 0; seed < STALL_SEEDS; seed++) {
                 lss_slave_faults f = faults_latency(700, 300);
-                f.spike_us = stall_us[seed % 4];
-                f.spike_ppm = 20000;
+                faults_stall(&f, seed, 20000);
                 membus *b = bus_random(4, seed, 0xEC, 0x1234, &f);
                 for (size_t i = 0; i < 4; i++) {
                         lss_slave_state *st = &membus_slave(b, i)->st;
                         st->active_node_id = st->pending_node_id = st->stored_node_id = (uint8_t) (20 + i);
                 }
                 lss_master *m = master_default();
-                const lss_result *r = slowscan_driven(m, b, NULL, NULL);
-                if (r->status != LSS_OK || r->n_devices != 4) {
-                        fprintf(stderr, "seed %u (%u ms stalls): %zu found: %s\n", (unsigned) seed,
-                                (unsigned) (f.spike_us / 1000), r->n_devices, r->message);
-                        failed++;
-                } else {
-                        assert_devices_real(b, r);
-                }
-                lss_drive_idle(b, 300000);
-                ck_assert(all_waiting(b));
+                stall_expect_found(&failed, seed, &f, b, slowscan_driven(m, b, NULL, NULL), 4);
                 lss_master_free(m);
                 membus_free(b);
         }

@@ -24,7 +24,6 @@
 /* under valgrind (meson test --setup valgrind) a few: it checks memory */
 #define SEEDS (getenv("LSSD_TEST_UNDER_VALGRIND") ? 20u : SEEDS_FULL)
 
-static const uint32_t stall_us[] = { 20000, 50000, 100000, 200000 };
 static const uint32_t stall_ppm[] = { 20000, 50000 };
 
 typedef struct member {
@@ -53,8 +52,8 @@ static membus *stalled_bus(const member *mb, size_t n, uint64_t seed) {
         lss_slave_faults_canopennode(&co);
         co.latency_us = plain.latency_us;
         co.jitter_us = plain.jitter_us;
-        plain.spike_us = co.spike_us = stall_us[seed % 4];
-        plain.spike_ppm = co.spike_ppm = stall_ppm[(seed / 4) % 2];
+        faults_stall(&plain, seed, stall_ppm[(seed / 4) % 2]);
+        faults_stall(&co, seed, stall_ppm[(seed / 4) % 2]);
         membus *b = membus_new(125000);
         ck_assert_ptr_nonnull(b);
         membus_set_seed(b, seed);
@@ -73,14 +72,14 @@ static const member *member_of(const member *mb, size_t n, const lss_identity *i
 /* Nobody misbehaves here: a Conflict is a false verdict. */
 static void no_false_verdict(const member *mb, size_t n, uint64_t seed, const lss_result *r) {
         ck_assert_msg(r->status != LSS_E_CONFLICT, "seed %u (%u ms stalls): %s", (unsigned) seed,
-                      stall_us[seed % 4] / 1000, r->message);
+                      stall_us_of(seed) / 1000, r->message);
         (void) mb;
         (void) n;
 }
 
 /* "seed N (M ms stalls)", for the checks' messages */
 static const char *seed_name(char *buf, size_t size, uint64_t seed) {
-        snprintf(buf, size, "seed %u (%u ms stalls)", (unsigned) seed, stall_us[seed % 4] / 1000);
+        snprintf(buf, size, "seed %u (%u ms stalls)", (unsigned) seed, stall_us_of(seed) / 1000);
         return buf;
 }
 
@@ -109,7 +108,7 @@ static void scan_of(const member *mb, size_t n) {
                 }
                 ck_assert_msg(r->status != LSS_OK || found_unconfigured == unconfigured,
                               "seed %u (%u ms stalls): OK with %zu of %zu non-configured found", (unsigned) seed,
-                              stall_us[seed % 4] / 1000, found_unconfigured, unconfigured);
+                              stall_us_of(seed) / 1000, found_unconfigured, unconfigured);
                 as_found(b, &bb, seed_name(name, sizeof(name), seed));
                 lss_master_free(m);
                 membus_free(b);
@@ -149,7 +148,7 @@ START_TEST(autoassign_of_the_issue_network) {
                 for (size_t i = 0; i < k; i++)
                         ck_assert_msg(o[i].kind != LSS_OUTCOME_CONFLICT && o[i].kind != LSS_OUTCOME_FAILED,
                                       "seed %u (%u ms stalls): %x %s: %s", (unsigned) seed,
-                                      stall_us[seed % 4] / 1000, o[i].id.serial, lss_outcome_name(o[i].kind),
+                                      stall_us_of(seed) / 1000, o[i].id.serial, lss_outcome_name(o[i].kind),
                                       o[i].message);
                 const lss_outcome *moved = NULL;
                 for (size_t i = 0; i < k; i++)
@@ -157,7 +156,7 @@ START_TEST(autoassign_of_the_issue_network) {
                                 moved = &o[i];
                 ck_assert_msg(r->status != LSS_OK || (moved && moved->kind == LSS_OUTCOME_ASSIGNED),
                               "seed %u (%u ms stalls): done, 5001 %s (%s)", (unsigned) seed,
-                              stall_us[seed % 4] / 1000, moved ? lss_outcome_name(moved->kind) : "without outcome",
+                              stall_us_of(seed) / 1000, moved ? lss_outcome_name(moved->kind) : "without outcome",
                               moved ? moved->message : "");
                 /* also when the pass ends on an enumeration's verdict: it was
                  * moved and verified before */
