@@ -328,17 +328,18 @@ again:
                 if (s->dropped > 0)
                         master_fail(m, LSS_E_INCOMPLETE,
                                     "%u ranges answered identify each time but neither half did (not CiA 305, or "
-                                    "answers lost); %u slaves answered identify, then not the selective switch or Inquire Node-ID (%s%08x:%08x:"
-                                    "%08x:%08x)", s->unresolved, s->dropped, s->dropped > 1 ? "first " : "",
-                                    s->dropped_id.vendor, s->dropped_id.product, s->dropped_id.revision,
-                                    s->dropped_id.serial);
+                                    "answers lost); %u slaves answered identify, then not the selective switch or "
+                                    "Inquire Node-ID (%s%08x:%08x:%08x:%08x)", s->unresolved, s->dropped,
+                                    s->dropped > 1 ? "first " : "", s->dropped_id.vendor, s->dropped_id.product,
+                                    s->dropped_id.revision, s->dropped_id.serial);
                 else
                         master_fail(m, LSS_E_INCOMPLETE,
                                     "%u ranges answered identify each time but neither half did (not CiA 305, or "
                                     "answers lost)", s->unresolved);
         } else if (s->dropped > 0)
                 master_fail(m, LSS_E_INCOMPLETE,
-                            "%u slaves answered identify, then not the selective switch or Inquire Node-ID (%s%08x:%08x:%08x:%08x)",
+                            "%u slaves answered identify, then not the selective switch or Inquire Node-ID "
+                            "(%s%08x:%08x:%08x:%08x)",
                             s->dropped, s->dropped > 1 ? "first " : "", s->dropped_id.vendor, s->dropped_id.product,
                             s->dropped_id.revision, s->dropped_id.serial);
         goto out;
