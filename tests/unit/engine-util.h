@@ -106,6 +106,10 @@ static inline void assert_devices_real(membus *b, const lss_result *r) {
 /* A loaded host, seed by seed: each slave's answers 20, 50, 100 or 200 ms
  * late (by seed) on `ppm` per million of them; a stall holds back the
  * slave's later answers too (one transmit queue). */
+/* Seeds of a run over stalls: under valgrind (meson test --setup valgrind,
+ * which checks memory) a twentieth of them. */
+#define STALL_SEEDS(n) (getenv("LSSD_TEST_UNDER_VALGRIND") ? (n) / 20u : (n))
+
 static inline uint32_t stall_us_of(uint64_t seed) {
         static const uint32_t stall_us[] = { 20000, 50000, 100000, 200000 };
         return stall_us[seed % 4];

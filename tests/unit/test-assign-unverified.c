@@ -334,7 +334,7 @@ END_TEST
  * (before, 10 of these 100 seeds; 0 of 1000 now). */
 START_TEST(reset_pass_gives_back_through_stalls) {
         unsigned failed = 0;
-        for (uint64_t seed = 0; seed < 100; seed++) {
+        for (uint64_t seed = 0; seed < STALL_SEEDS(100u); seed++) {
                 lss_slave_faults f = lely();
                 faults_stall(&f, seed, 50000);
                 membus *b = membus_new(125000);

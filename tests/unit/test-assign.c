@@ -720,7 +720,7 @@ END_TEST
 START_TEST(unassign_through_stalls) {
         lss_master *m = master_default();
         unsigned failed = 0;
-        for (uint64_t seed = 0; seed < 400; seed++) {
+        for (uint64_t seed = 0; seed < STALL_SEEDS(400u); seed++) {
                 lss_slave_faults f = faults_latency(700, 300);
                 faults_stall(&f, seed, 100000);
                 membus *b = membus_new(125000);

@@ -586,7 +586,7 @@ END_TEST
  * own (lss_step.stale_is_answer) as a retry does. 0 of 1000 now. */
 START_TEST(stalls_change_no_verdict) {
         unsigned failed = 0;
-        for (uint64_t seed = 0; seed < 200; seed++) {
+        for (uint64_t seed = 0; seed < STALL_SEEDS(200u); seed++) {
                 lss_bitrate_device devs[4];
                 lss_slave_faults f = faults_latency(700, 300);
                 faults_stall(&f, seed, 50000);

@@ -120,7 +120,7 @@ END_TEST
  * one is confirmed (0 of 1000). */
 START_TEST(confirm_through_stalls) {
         unsigned failed = 0;
-        for (uint64_t seed = 0; seed < 200; seed++) {
+        for (uint64_t seed = 0; seed < STALL_SEEDS(200u); seed++) {
                 lss_slave_faults plain = faults_latency(700, 300), co = faults_canopennode();
                 faults_stall(&plain, seed, 50000);
                 faults_stall(&co, seed, 50000);

@@ -3,7 +3,6 @@
  * slaves of one vendor/product, each verified, nothing changed. Both scans
  * keep every slave when frames are lost on the way to the slaves. */
 #include <stdio.h>
-#include <stdlib.h>
 
 #include "engine-util.h"
 
@@ -459,11 +458,9 @@ END_TEST
  * drops a slave wait patiently: the range asked again after its halves
  * were silent, the gaps once answers went astray, the Inquire Node-ID of
  * a slave selected. */
-#define STALL_SEEDS (getenv("LSSD_TEST_UNDER_VALGRIND") ? 10u : 200u)
-
 START_TEST(slowscan_through_stalls) {
         unsigned failed = 0;
-        for (uint64_t seed = 0; seed < STALL_SEEDS; seed++) {
+        for (uint64_t seed = 0; seed < STALL_SEEDS(200u); seed++) {
                 lss_slave_faults f = faults_latency(700, 300);
                 faults_stall(&f, seed, 20000);
                 membus *b = bus_random(4, seed, 0xEC, 0x1234, &f);
