@@ -839,8 +839,16 @@ void lss_master_on_time(lss_master *m, uint64_t now) {
 void lss_master_on_sent(lss_master *m, uint64_t now) {
         if (now > m->now)
                 m->now = now;
+        if (!m->running || m->step.confirmed)
+                return;
+        /* A host stalled between the step's start and this write ran its
+         * wait out before the request was out: the wait starts now (else the
+         * step ended at once, silent, and the next request followed its own
+         * within a frame time: engine-vcan's witness in a loaded VM). */
+        if (m->step.phase == PHASE_LATE_GUARD && !m->step.written)
+                m->step.phase = PHASE_WAIT;
         /* timeouts run from the moment the request really left */
-        if (m->running && m->step.phase == PHASE_WAIT && !m->step.confirmed) {
+        if (m->step.phase == PHASE_WAIT) {
                 if (now > m->step.sent_at)
                         m->step.sent_at = now;
                 m->step.written = true;
