@@ -358,8 +358,14 @@ static int give_back(lss_master *m, lss_scan_state *s) {
                         if (s->gb_try > 0 && !back_due(s, &s->cand[s->i]))
                                 continue;
                         SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->i].id);
-                        /* a slave confirmed in this pass: silence is a stall,
-                         * likely (unverified, the whole pass is asked again) */
+                        /* A slave confirmed in this pass: silence is a stall,
+                         * likely (unverified, the whole pass is asked again).
+                         * One whose answer was lost, or came unseen while the
+                         * switch was asked again, is in configuration, deaf to
+                         * it: the patient asks start from waiting (nobody else
+                         * is in configuration here). */
+                        if (!step_answered(m))
+                                SEND(m, &s->vpc, lss_encode_switch_global(&f__, LSS_MODE_WAITING));
                         AGAIN_PATIENTLY_IF_SILENT(m, SELECT_RETRIED(m, &s->vpc, s->attempt, &s->cand[s->i].id));
                         if (!step_answered(m))
                                 continue;
@@ -806,6 +812,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                 s->recheck = s->patient_round = false;
                 s->next_temp = LSS_NODE_ID_MAX;
                 s->hint = (lss_fastscan_known) { 0 };
+                s->floored = false;
                 memset(s->back_due, 0, sizeof(s->back_due));
                 memset(s->held, 0, sizeof(s->held));
                 memset(s->temp_taken, 0, sizeof(s->temp_taken));
@@ -846,6 +853,8 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                          * stalled shows as a second frame or a stray answer,
                          * which turn that off too (lss_fastscan.c, judge_lone). */
                         s->fs = (lss_fastscan_state) { .known = s->known, .hint = s->hint,
+                                                       .floor = s->hint.value,
+                                                       .floored = s->floored && s->n_kept_bent == 0,
                                                        .others_answer = s->n_kept_bent > 0,
                                                        .ping_again = s->looks > 0 };
                         /* A Scan that finds nobody says the bus is empty, and
@@ -875,6 +884,10 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         if (m->cancelling)
                                 break;
                         s->pinged = s->pinged || s->fs.heard;
+                        /* a floor holds from one find to the next: anything else
+                         * (a look, a fastscan that found nobody, a find not
+                         * confirmed, a patient round) may bring a slave below it */
+                        s->floored = false;
                         if (s->fs.none) {
                                 /* a ping answered, a later one silent: a slave went
                                  * into configuration on an answer that came late,
@@ -955,6 +968,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                         PT_CALL(&s->pc, handle_found(m, s));
                         if (m->result.status != LSS_OK)
                                 break;
+                        s->floored = s->confirm == CONFIRM_OK && !s->recheck;
                         if (s->confirm == CONFIRM_UNCLEAR && s->failed_scans + 1 > m->timing.cfg.retries)
                                 recheck_first(s);
                         if (s->recheck) {

@@ -104,6 +104,8 @@ typedef struct lss_fastscan_state {
         unsigned top;              /* top bits of value[sub] this field read takes as given */
         bool hinted;               /* ... from the hint */
         lss_identity guess;        /* fields [0, n_guess): tried before they are scanned */
+        lss_identity floor;        /* the last find, when `floored`: every slave taking part is above it */
+        bool floored;
         unsigned n_guess;
         bool guessing;             /* every field so far was a guess that held */
         uint32_t value[LSS_FIELD_COUNT];
@@ -133,6 +135,7 @@ typedef struct lss_fastscan_state {
         int confirm_pc;            /* confirm_field() */
         int confirm_after;         /* `after` of the confirmation being asked */
         unsigned silent_run;       /* silent bit steps in a row in this field read */
+        int silent_bit;            /* the bit of the last silent bit step */
         int check_pc;              /* check_field_read() */
         enum { CHECK_HELD, CHECK_FIXED, CHECK_DOUBT, CHECK_NOBODY } check; /* its outcome: somebody
                                     * matches; a bit read wrong found (s->bit, value); neither
@@ -259,6 +262,8 @@ typedef struct lss_scan_state {
         lss_identity last_found; /* the last slave confirmed (its fields are the next fastscan's guess) */
         lss_fastscan_known known;
         lss_fastscan_known hint; /* enumeration: the last find and the top bits others shared with it */
+        bool floored;           /* the last find (hint.value) was the least slave taking part, as far
+                                 * as the pass knows: the next fastscan's floor (lss_fastscan.c) */
         lss_identify_range range;
         lss_fastscan_state fs;
         unsigned pass, i, dropped, failed_scans, attempt, unresolved;
