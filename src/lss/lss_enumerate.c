@@ -853,7 +853,6 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                          * stalled shows as a second frame or a stray answer,
                          * which turn that off too (lss_fastscan.c, judge_lone). */
                         s->fs = (lss_fastscan_state) { .known = s->known, .hint = s->hint,
-                                                       .floor = s->hint.value,
                                                        .floored = s->floored && s->n_kept_bent == 0,
                                                        .others_answer = s->n_kept_bent > 0,
                                                        .ping_again = s->looks > 0 };

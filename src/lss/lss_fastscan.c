@@ -227,9 +227,9 @@ static bool floor_forces(const lss_fastscan_state *s) {
         if (!s->floored || s->attempt > 0 || s->field_try > 0 || s->bit == 0)
                 return false;
         for (unsigned i = 0; i < s->sub; i++)
-                if (s->value[i] != lss_identity_field(&s->floor, i))
+                if (s->value[i] != lss_identity_field(&s->hint.value, i))
                         return false;
-        uint32_t f = lss_identity_field(&s->floor, s->sub);
+        uint32_t f = lss_identity_field(&s->hint.value, s->sub);
         return ((s->value[s->sub] ^ f) & ~low_bits(s->bit + 1)) == 0 && (f >> s->bit & 1u);
 }
 

@@ -104,8 +104,7 @@ typedef struct lss_fastscan_state {
         unsigned top;              /* top bits of value[sub] this field read takes as given */
         bool hinted;               /* ... from the hint */
         lss_identity guess;        /* fields [0, n_guess): tried before they are scanned */
-        lss_identity floor;        /* the last find, when `floored`: every slave taking part is above it */
-        bool floored;
+        bool floored;              /* hint.value (the last find) is the floor: every slave taking part is above it */
         unsigned n_guess;
         bool guessing;             /* every field so far was a guess that held */
         uint32_t value[LSS_FIELD_COUNT];
