@@ -29,6 +29,8 @@ enum { PT_WAITING = 0, PT_DONE = 1 };
 /* Silent fastscan bit steps in a row after which a field read is checked:
  * does anybody still match? (lss_fastscan.c) */
 #define LSS_FASTSCAN_CHECK_RUN 6u
+/* The frames of an Identify Remote Slave request (step_identify). */
+#define LSS_IDENTIFY_TX 6u
 /* ... and searched for a bit read wrong at most this often a field read
  * (a late answer of a stall may land after the search and read one more
  * wrong); after that its confirmation decides, and the field is read again */

@@ -37,9 +37,9 @@ void step_selective(lss_master *m, const lss_identity *id) {
 }
 
 void step_identify(lss_master *m, const lss_identify_range *r) {
-        const uint32_t v[6] = { r->vendor, r->product, r->rev_lo, r->rev_hi, r->serial_lo, r->serial_hi };
+        const uint32_t v[LSS_IDENTIFY_TX] = { r->vendor, r->product, r->rev_lo, r->rev_hi, r->serial_lo, r->serial_hi };
         step_lss(m, LSS_CS_IDENTIFY_SLAVE);
-        for (unsigned i = 0; i < 6; i++) {
+        for (unsigned i = 0; i < LSS_IDENTIFY_TX; i++) {
                 lss_frame f;
                 lss_encode_identify_remote(&f, i, v[i]);
                 step_add_tx(m, &f);

@@ -228,18 +228,27 @@ def test_autoassign():
 
 def test_boot():
     slaves = slaves_of(4, 40)
-    # the other master from the start: a request every 100 ms for 2 s
+    # the other master from the start: a request every 100 ms for 2 s (on
+    # vcan until lssd's pass says it waits, 2 s at least: in a CI run beside
+    # another VM lssd was up only after 5.4 s, when 2 s of requests were over)
     env = Env({'vcan0': slaves}, config=config(auto_assign=True), candump=True, notify=True, start_lssd=False,
               lssd_args=['--sim-foreign-master', 'vcan0:0:20:100'])
     if env.real:
         env.lssd_args = []
     with env:
         sent = {}
+        stop = threading.Event()
         if env.real:
-            t = threading.Thread(target=lambda: sent.setdefault('w', send_requests(b'\x5a' + bytes(7), 20, 0.1)))
+            t0 = time.time()
+            t = threading.Thread(target=lambda: sent.setdefault('w', send_requests(b'\x5a' + bytes(7), 6000, 0.1, stop)))
             t.start()
             time.sleep(0.2)
         env._start_lssd()
+        if env.real:
+            env.notify_wait(lambda m: 'auto-assign waits until another LSS master' in m.get('STATUS', ''),
+                            timeout=300, what='STATUS: the boot pass waits for the other master')
+            time.sleep(max(0.0, t0 + 2.0 - time.time()))
+            stop.set()
         ready = env.notify_wait(lambda m: m.get('READY') == '1', timeout=600, what='READY=1')
         if env.real:
             t.join()
