@@ -338,16 +338,10 @@ void step_on_time(lss_master *m, uint64_t now) {
                 }
                 m->stats.timeouts++;
                 s->phase = PHASE_LATE_GUARD;
-                /* the shortened guard only once the request was written: a
-                 * host stalled before the write ran the wait out, and the
-                 * late guard is where the write puts the step back to its
-                 * wait (lss_master_on_sent); ended at once, the next request
-                 * followed this one within a frame time (engine-vcan, CI) */
-                bool short_guard = s->next_watches && s->written && !s->late_us;
-                s->end_at = d + (s->late_us     ? s->late_us
-                                 : short_guard ? lss_timing_watched_late_guard(&m->timing, step_wait_kind(s))
-                                               : lss_timing_late_guard(&m->timing, step_wait_kind(s)));
-                m->short_guard_ended = short_guard;
+                s->end_at = d + (s->late_us        ? s->late_us
+                                 : s->next_watches ? lss_timing_watched_late_guard(&m->timing, step_wait_kind(s))
+                                                   : lss_timing_late_guard(&m->timing, step_wait_kind(s)));
+                m->short_guard_ended = s->next_watches && !s->late_us;
                 if (now >= s->end_at)
                         step_on_time(m, now);
                 return;
