@@ -5,6 +5,7 @@
 #include <stdio.h>
 
 #include "engine-util.h"
+#include "lss/lss_timing.h"
 
 static lss_identify_range full_range(uint32_t vendor, uint32_t product) {
         return (lss_identify_range) { vendor, product, 0, UINT32_MAX, 0, UINT32_MAX };
@@ -541,7 +542,7 @@ static void count_verdict_waits(void *ud, const lss_frame *f, uint64_t t) {
         verdict_waits *v = ud;
         if (!lss_is_request(f))
                 return;
-        if (v->request_at && t - v->request_at >= 250000) /* lss_timing.h: LSS_VERDICT_WAIT_FLOOR_US */
+        if (v->request_at && t - v->request_at >= LSS_VERDICT_WAIT_FLOOR_US)
                 v->n++;
         v->request_at = t;
 }
