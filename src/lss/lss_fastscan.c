@@ -45,6 +45,20 @@ static void judge_lone(lss_master *m, lss_fastscan_state *s) {
         s->strays = m->stats.stray_answers;
 }
 
+/* While one slave alone takes part, a silent bit step's late answer lands
+ * in the step after it, which watches for it (an early answer after a
+ * silent step, below) and asks the bit again: two steps, where the late
+ * guard cost every silent bit step (4-8 s of a VM Scan of 127); so its
+ * guard is shortened by what that watch tells (lss_timing_watched_late_guard).
+ * Not a field's bit 0 (its late answer in the confirmation confirms a value
+ * nobody has: an attempt), nor the bit whose silence starts a check
+ * (check_field_read does not watch), nor in a patient round (a verdict's
+ * re-check waits for every answer). */
+static bool late_answer_watched(const lss_master *m, const lss_fastscan_state *s) {
+        return s->lone && !m->patient && s->bit > 0 &&
+               !(s->silent_run + 1 == LSS_FASTSCAN_CHECK_RUN && s->searches < LSS_FASTSCAN_SEARCHES);
+}
+
 /* `unguarded`: the step may end at its answer when one slave alone takes
  * part. `bit`: a bit step, whose silence is an answer (the shorter wait).
  * A bit step after a silent one watches for an early answer (below). */
@@ -52,6 +66,7 @@ static void judge_lone(lss_master *m, lss_fastscan_state *s) {
 #define FASTSCAN_STEP_AT(m, s, pc, frame_expr, unguarded, bit) \
         do { lss_frame f__; frame_expr; step_lss(m, LSS_CS_IDENTIFY_SLAVE); step_add_tx(m, &f__); \
              m->step.ends_at_answer = (s)->lone && (unguarded); m->step.silence_answers = (bit); \
+             m->step.next_watches = (bit) && late_answer_watched(m, s); \
              m->step.watch_early = (s)->watch_next; (s)->watch_next = false; \
              step_start(m); PT_YIELD(pc); \
              judge_lone(m, s); (s)->before_sent_us = (s)->sent_us; \
@@ -65,7 +80,8 @@ static void judge_lone(lss_master *m, lss_fastscan_state *s) {
  * (docs/engine.md, "An early answer after a silence"). This is the late
  * answer's latency from its own request. */
 static uint32_t late_latency(const lss_master *m, const lss_fastscan_state *s) {
-        uint64_t l = m->step.first_at > s->before_sent_us ? m->step.first_at - s->before_sent_us : 0;
+        uint64_t at = m->step.stale_answer ? m->step.stale_at : m->step.first_at;
+        uint64_t l = at > s->before_sent_us ? at - s->before_sent_us : 0;
         return l > UINT32_MAX ? UINT32_MAX : (uint32_t) l;
 }
 
@@ -343,6 +359,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                                                  (uint8_t) s->sub), s->bit > 0, true);
                                                 s->bit_answered = step_answered(m);
                                                 note_crowd(m, s, 32u - (unsigned) s->bit);
+                                                s->doubt_run = false;
                                                 s->late_before = m->step.stale_answer ||
                                                                  (s->bit_answered && m->step.early);
                                                 if (s->late_before && s->early_after == AFTER_SILENT_CONFIRM) {
@@ -351,7 +368,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                 }
                                                 if (s->late_before && s->early_after == AFTER_SILENT_BIT) {
                                                         s->early_latency_us = m->step.early ? m->step.latency_us : 0;
-                                                        s->late_latency_us = m->step.early ? late_latency(m, s) : 0;
+                                                        s->late_latency_us =
+                                                                s->late_before ? late_latency(m, s) : 0;
                                                         FASTSCAN_STEP(m, s,
                                                                      lss_encode_fastscan(&f__,
                                                                                          s->value[s->sub] & ~(1u << s->silent_bit),
@@ -369,9 +387,13 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                                 s->bit = s->silent_bit;
                                                                 continue;
                                                         }
-                                                        /* the early answer was this bit's own */
+                                                        /* the early answer was this bit's own, or
+                                                         * the late one of a silent step before the
+                                                         * last (a stall longer than a step): then
+                                                         * the bits as read are checked */
                                                         if (s->early_latency_us)
                                                                 step_sample(m, s->early_latency_us);
+                                                        s->doubt_run = s->silent_run >= 2;
                                                 }
                                                 if (!s->bit_answered) {
                                                         s->value[s->sub] |= 1u << s->bit;
@@ -381,8 +403,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                 } else {
                                                         s->silent_run = 0;
                                                 }
-                                                if (s->silent_run == LSS_FASTSCAN_CHECK_RUN && s->bit > 0 &&
-                                                    s->searches < LSS_FASTSCAN_SEARCHES) {
+                                                if ((s->silent_run == LSS_FASTSCAN_CHECK_RUN || s->doubt_run) &&
+                                                    s->bit > 0 && s->searches < LSS_FASTSCAN_SEARCHES) {
                                                         s->check_pc = 0;
                                                         PT_CALL(&s->pc, check_field_read(m, s));
                                                         if (s->check == CHECK_FIXED)

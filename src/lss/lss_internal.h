@@ -61,6 +61,8 @@ typedef struct lss_step {
         bool ends_at_answer;   /* the first answer is the only one that can come (or all
                                 * are the same): no answer guard (lss_step.c) */
         bool watch_early;      /* a step after one nobody answered: judge `early` */
+        bool next_watches;     /* the step after this one watches for this one's late
+                                * answer (watch_early): the shorter late guard */
         bool stale_is_answer;  /* (watch_early) the step before's late answer is this one's: the
                                 * same request, and its slave acted on it (a selective switch:
                                 * it is in configuration now, deaf to the request asked again) */
@@ -81,6 +83,9 @@ typedef struct lss_step {
         uint32_t latency_us;   /* of the first answer */
         bool stale_answer;     /* (watch_early) an answer it asks for came before its
                                 * request was out: the step before's, late */
+        uint64_t stale_at;     /* ... the first one's arrival */
+        bool after_short_guard; /* the step before ended in its shortened late guard
+                                * (next_watches): its late answer is no stall's sign */
         bool void_;            /* frames were lost meanwhile: do not trust */
         bool needs_echo;       /* tx confirmation was on when the step began */
         bool written;          /* on_sent() came: the request was handed to the transport */
@@ -132,6 +137,7 @@ typedef struct lss_fastscan_state {
         bool confirm_guessed;      /* ... which was a guess */
         bool late_confirmed;       /* ... whose answer came early in the next step */
         bool late_before, bit_answered; /* the bit step just asked */
+        bool doubt_run;            /* ... its early answer may be a silent step's before the last */
         uint32_t early_latency_us, late_latency_us; /* an early answer: as the next step's, as the one before's */
         int confirm_pc;            /* confirm_field() */
         int confirm_after;         /* `after` of the confirmation being asked */
@@ -344,6 +350,7 @@ struct lss_master {
         bool final_repeated;      /* the same answer came again within that time */
         uint64_t strays_until;    /* stray answers until then are of the stall that last
                                    * lengthened the waits (step_on_stray) */
+        bool short_guard_ended;   /* the last step ended in its shortened late guard */
 
         /* master_patient_begin(): the configured timing, back at _end */
         lss_timing_config calm_cfg;

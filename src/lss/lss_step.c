@@ -93,6 +93,8 @@ void step_start(lss_master *m) {
         if (m->answers_until > m->now)
                 s->busy_us = m->answers_until - m->now;
         s->sent_at = m->now;
+        s->after_short_guard = m->short_guard_ended;
+        m->short_guard_ended = false;
         if (s->kind == STEP_LSS && s->expect_cs >= 0)
                 m->asked_at[s->expect_cs & 0xFF] = m->now + 1;
         s->needs_echo = s->kind == STEP_LSS && m->tx_confirm;
@@ -166,7 +168,10 @@ void step_on_stray(lss_master *m, const lss_frame *f) {
         }
         /* before this step's request was out: the step before's, late */
         if (m->step.watch_early && step_matches(&m->step, f)) {
+                bool first = !m->step.stale_answer;
                 m->step.stale_answer = true;
+                if (first)
+                        m->step.stale_at = m->now;
                 if (m->step.stale_is_answer && m->step.n_answers == 0 && m->step.phase == PHASE_WAIT) {
                         m->step.answer = *f;
                         m->step.n_answers = m->step.n_frames = 1;
@@ -174,6 +179,12 @@ void step_on_stray(lss_master *m, const lss_frame *f) {
                         m->step.late = true;
                         m->step.phase = PHASE_DONE;
                 }
+                /* the one late answer the shortened guard of the step before
+                 * left to this one (lss_timing_watched_late_guard): the
+                 * procedure asks about it, as one in the guard would have
+                 * been taken; a second one is a stall's */
+                if (first && m->step.after_short_guard)
+                        return;
         }
         m->stats.stray_answers++;
         /* One stall of the host delays every answer it holds: a crowded
@@ -327,7 +338,18 @@ void step_on_time(lss_master *m, uint64_t now) {
                 }
                 m->stats.timeouts++;
                 s->phase = PHASE_LATE_GUARD;
-                s->end_at = d + (s->late_us ? s->late_us : lss_timing_late_guard(&m->timing, step_wait_kind(s)));
+                /* the shortened guard only once the request was written: a
+                 * host stalled before the write ran the wait out, and the
+                 * late guard is where the write puts the step back to its
+                 * wait (lss_master_on_sent); ended at once, the next request
+                 * followed this one within a frame time (engine-vcan, CI) */
+                bool short_guard = s->next_watches && s->written && !s->late_us;
+                s->end_at = d + (s->late_us     ? s->late_us
+                                 : short_guard ? lss_timing_watched_late_guard(&m->timing, step_wait_kind(s))
+                                               : lss_timing_late_guard(&m->timing, step_wait_kind(s)));
+                m->short_guard_ended = short_guard;
+                if (now >= s->end_at)
+                        step_on_time(m, now);
                 return;
         case PHASE_LATE_GUARD:
                 /* no echo yet: the request is not known to be on the wire,

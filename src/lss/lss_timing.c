@@ -178,18 +178,30 @@ uint32_t lss_timing_answer_guard(const lss_timing *t) {
  * unknown: slaves faster than twice that (no latency of their own to speak
  * of) have no early answers. On vcan the frame time is 0. */
 bool lss_timing_early(const lss_timing *t, uint32_t latency_us) {
+        return latency_us < lss_timing_early_within(t);
+}
+
+uint32_t lss_timing_early_within(const lss_timing *t) {
         if (t->n_samples < LSS_EARLY_FIRST_SAMPLES)
-                return false;
+                return 0;
         int64_t frame = t->cfg.bitrate ? 111ll * 1000000 / t->cfg.bitrate : 0;
         int64_t slack = t->cfg.bitrate ? 24ll * 1000000 / t->cfg.bitrate : 0;
-        int64_t own = (int64_t) latency_us - frame, fastest = (int64_t) fastest_of_most(t) - frame;
-        return fastest > 2 * slack && own * 4 < fastest * 3;
+        int64_t fastest = (int64_t) fastest_of_most(t) - frame;
+        if (fastest <= 2 * slack)
+                return 0;
+        /* own * 4 < fastest * 3, own = latency - frame */
+        return (uint32_t) (frame + (fastest * 3 + 3) / 4);
 }
 
 uint32_t lss_timing_late_guard(const lss_timing *t, enum lss_wait_kind kind) {
         /* patience lengthens the wait, not this */
         uint32_t g = wait_up_to(t, kind, false) / 4;
         return g > t->cfg.guard_floor_us ? g : t->cfg.guard_floor_us;
+}
+
+uint32_t lss_timing_watched_late_guard(const lss_timing *t, enum lss_wait_kind kind) {
+        uint32_t g = lss_timing_late_guard(t, kind), e = lss_timing_early_within(t);
+        return g > e ? g - e : 0;
 }
 
 uint32_t lss_timing_listen_guard(const lss_timing *t) {

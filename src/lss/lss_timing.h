@@ -15,7 +15,9 @@
  *                      queues behind the first on the wire)
  *   late guard         after a wait ran out: max(guard_floor, wait / 4),
  *                      the wait taken without patience. An answer in it
- *                      still counts and raises `max`.
+ *                      still counts and raises `max`. A step whose late
+ *                      answer the next step watches for (a lone fastscan
+ *                      bit step) has it shortened by the early window.
  *   patience           what late answers showed the waits must be. A late
  *                      answer to a discovery step raises it to 1.5 x its
  *                      latency (the other steps' waits follow `max`); an LSS
@@ -73,6 +75,8 @@ uint32_t lss_timing_min(const lss_timing *t);
  * for a step's own): too soon to be a slave's answer to the request just
  * sent, as far as this bus has shown. */
 bool lss_timing_early(const lss_timing *t, uint32_t latency_us);
+/* The latency below which an answer is judged early now; 0: none is. */
+uint32_t lss_timing_early_within(const lss_timing *t);
 /* The longest no-answer wait now: the timeout, or the patience if longer. */
 uint32_t lss_timing_limit(const lss_timing *t);
 /* A step's first answer came `latency_us` after its request: `late` when it
@@ -93,6 +97,13 @@ enum lss_wait_kind {
 uint32_t lss_timing_wait(const lss_timing *t, enum lss_wait_kind kind);
 uint32_t lss_timing_answer_guard(const lss_timing *t);
 uint32_t lss_timing_late_guard(const lss_timing *t, enum lss_wait_kind kind);
+/* The late guard of a step whose next step watches for its late answer
+ * (one that lands there before that step's request is out, or within
+ * lss_timing_early_within of it, is judged early: asked about, not taken
+ * for that step's own), shortened by lss_timing_early_within: nothing on a
+ * bus whose slaves take time of their own, the whole guard on one whose
+ * answers cannot be told early. */
+uint32_t lss_timing_watched_late_guard(const lss_timing *t, enum lss_wait_kind kind);
 /* The longest wait patience may grow to: LSS_PATIENCE_FACTOR x timeout, at
  * most LSS_PATIENCE_MAX_US. */
 uint32_t lss_timing_patience_cap(const lss_timing *t);
