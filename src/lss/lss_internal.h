@@ -318,6 +318,8 @@ struct lss_master {
         bool running, done, cancelling;
         bool procedure;         /* ends with every slave in waiting, also on failure */
         bool tx_confirm;        /* the transport echoes our frames once they are on the wire */
+        bool reports_writes;    /* the driver calls lss_master_on_sent(): a step's wait
+                                 * begins at its write, not before */
         uint64_t now;
         /* when a step last waited for each LSS answer cs, + 1 (0: never):
          * only an answer to something asked lately can be a late one */

@@ -839,6 +839,7 @@ void lss_master_on_time(lss_master *m, uint64_t now) {
 void lss_master_on_sent(lss_master *m, uint64_t now) {
         if (now > m->now)
                 m->now = now;
+        m->reports_writes = true;
         if (!m->running || m->step.confirmed)
                 return;
         /* A host stalled between the step's start and this write ran its

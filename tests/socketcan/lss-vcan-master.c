@@ -41,8 +41,9 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
                         while ((r = socketcan_port_send(p, &f)) == -EAGAIN && socketcan_port_now(p) < until)
                                 (void) poll(NULL, 0, 1);
                         if (getenv("LSS_DEBUG"))
-                                fprintf(stderr, "send %03X fd %d ifindex %d state %d -> %d\n", (unsigned) f.id,
-                                        socketcan_port_fd(p), socketcan_port_ifindex(p), socketcan_port_state(p), r);
+                                fprintf(stderr, "send %03X %02X%02X fd %d ifindex %d state %d -> %d at %llu\n", (unsigned) f.id,
+                                        f.data[0], f.data[5], socketcan_port_fd(p), socketcan_port_ifindex(p),
+                                        socketcan_port_state(p), r, (unsigned long long) t_send);
                         if (r < 0) {
                                 lss_master_on_bus_error(m, LSS_E_BUS_DOWN, strerror(-r), socketcan_port_now(p));
                                 return lss_master_result(m);
@@ -63,7 +64,8 @@ static const lss_result *drive(lss_master *m, socketcan_port *p) {
                 int r;
                 while ((r = socketcan_port_recv(p, &f, &rx)) > 0) {
                         if (getenv("LSS_DEBUG"))
-                                fprintf(stderr, "recv %03X %02X rx %llu now %llu\n", (unsigned) f.id, f.data[0],
+                                fprintf(stderr, "recv %03X %02X%02X%s rx %llu now %llu\n", (unsigned) f.id, f.data[0], f.data[5],
+                                        (f.flags & LSS_FRAME_ECHO) ? " echo" : "",
                                         (unsigned long long) rx, (unsigned long long) socketcan_port_now(p));
                         if (!(f.flags & LSS_FRAME_ECHO))
                                 lss_master_on_frame(m, &f, rx);
