@@ -305,7 +305,9 @@ void step_on_frame(lss_master *m, const lss_frame *f, uint64_t rx) {
 static enum lss_wait_kind step_wait_kind(const lss_step *s) {
         if (s->discovery)
                 return LSS_WAIT_DISCOVERY;
-        return s->silence_answers ? LSS_WAIT_BIT : LSS_WAIT_ANSWER;
+        if (!s->silence_answers)
+                return LSS_WAIT_ANSWER;
+        return s->next_watches ? LSS_WAIT_WATCHED_BIT : LSS_WAIT_BIT;
 }
 
 uint64_t step_deadline(const lss_master *m) {

@@ -86,6 +86,15 @@ static uint32_t bit_slowest(const lss_timing *t) {
         return t->n_samples < LSS_EARLY_MIN_SAMPLES ? lss_timing_max(t) : ranked(t, 1, true);
 }
 
+/* ... and the slowest but two where the next step watches for a late
+ * answer (one slave alone takes part): a stall it misses costs the bit
+ * asked again, where two stalls in the window kept every silent bit step
+ * long for 32 answers (1.0-1.6 s of a VM Scan of 127 net, replayed on
+ * its candumps; bench/README, 2026-12-03 evening). */
+static uint32_t watched_bit_slowest(const lss_timing *t) {
+        return t->n_samples < LSS_EARLY_MIN_SAMPLES ? lss_timing_max(t) : ranked(t, 2, true);
+}
+
 uint32_t lss_timing_limit(const lss_timing *t) {
         return t->patience_us > t->cfg.timeout_us ? t->patience_us : t->cfg.timeout_us;
 }
@@ -95,8 +104,9 @@ static uint32_t wait_up_to(const lss_timing *t, enum lss_wait_kind kind, bool pa
         uint32_t limit = patience ? lss_timing_limit(t) : t->cfg.timeout_us;
         if (!t->cfg.adaptive || kind == LSS_WAIT_DISCOVERY || t->n_samples == 0)
                 return limit;
-        uint64_t w = kind == LSS_WAIT_BIT ? (uint64_t) bit_slowest(t) * t->cfg.bit_factor_pct / 100
-                                          : (uint64_t) lss_timing_max(t) * t->cfg.factor_pct / 100;
+        uint64_t w = kind == LSS_WAIT_BIT           ? (uint64_t) bit_slowest(t) * t->cfg.bit_factor_pct / 100
+                     : kind == LSS_WAIT_WATCHED_BIT ? (uint64_t) watched_bit_slowest(t) * t->cfg.bit_factor_pct / 100
+                                                    : (uint64_t) lss_timing_max(t) * t->cfg.factor_pct / 100;
         if (w < t->cfg.floor_us)
                 w = t->cfg.floor_us;
         if (patience && w < t->patience_us)

@@ -9,7 +9,8 @@
  *                      (limit until the first answer was measured); a step
  *                      whose silence is an answer (a fastscan bit step)
  *                      takes bit_factor instead of factor, and the
- *                      slowest but one for max (from LSS_EARLY_MIN_SAMPLES)
+ *                      slowest but one for max (from LSS_EARLY_MIN_SAMPLES;
+ *                      but two for a lone slave's, LSS_WAIT_WATCHED_BIT)
  *   answer guard       after the first answer: max(guard_floor, max - min)
  *                      + one answer frame (a second responder's answer
  *                      queues behind the first on the wire)
@@ -89,6 +90,8 @@ enum lss_wait_kind {
         LSS_WAIT_ANSWER,    /* silence is a failure (asked again, or an error): factor */
         LSS_WAIT_BIT,       /* silence is an answer (a fastscan bit reads 1): bit_factor;
                              * a late answer is caught as early in the next step */
+        LSS_WAIT_WATCHED_BIT, /* ... of a lone slave, whose late answer the next step
+                             * watches for: a miss costs the bit asked again */
         LSS_WAIT_DISCOVERY, /* first contact with unknown slaves: the configured
                              * timeout, so that slow slaves get measured */
 };

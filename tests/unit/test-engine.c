@@ -898,6 +898,12 @@ START_TEST(bit_wait_outlasts_one_stall) {
         ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_ANSWER), 13500);
         lss_timing_add_sample(&t, 8000);
         ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_BIT), 10000);
+        /* a lone slave's bit step, whose late answer the next step watches
+         * for, outlasts two; a third sets it */
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_WATCHED_BIT), 2500);
+        lss_timing_add_sample(&t, 6000);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_WATCHED_BIT), 7500);
+        ck_assert_uint_eq(lss_timing_wait(&t, LSS_WAIT_BIT), 10000);
 }
 END_TEST
 

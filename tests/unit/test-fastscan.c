@@ -286,6 +286,35 @@ START_TEST(lone_silent_bit_steps_have_no_late_guard) {
 }
 END_TEST
 
+/* Two stalled answers in the window do not lengthen a lone slave's silent
+ * bit steps (the slowest but two: lss_timing.h, LSS_WAIT_WATCHED_BIT): a
+ * miss costs the bit asked again, where the slowest but one kept every
+ * silent bit step at 1.25 x the stall for the next 32 answers (1.0-1.6 s of
+ * a VM Scan of 127, replayed on its candumps). */
+START_TEST(lone_bit_steps_outlast_two_stalls) {
+        lss_slave_faults f = faults_latency(1000, 0);
+        membus *b = bus_random(1, 11, 0, 0, &f);
+        lss_master *m = master_default();
+        /* the request, 1.25 x the latency (answer frame included), an eighth more */
+        uint64_t l = 1000 + 1080;
+        silent_gaps g = { .unguarded_max = 1080 + l * 125 / 100 + l / 8 };
+        membus_set_trace(b, time_silent_gaps, &g);
+        ck_assert_int_eq(lss_master_fastscan(m, NULL, membus_now(b)), 0);
+        for (unsigned i = 0; i < LSS_EARLY_MIN_SAMPLES; i++)
+                lss_timing_add_sample(&m->timing, (uint32_t) l);
+        lss_timing_add_sample(&m->timing, 6000);
+        lss_timing_add_sample(&m->timing, 6000);
+        const lss_result *r = run(m, b);
+        ck_assert_int_eq(r->status, LSS_OK);
+        ck_assert(lss_identity_equal(&r->id, &membus_slave(b, 0)->id));
+        ck_assert_uint_gt(g.bits, 20);
+        ck_assert_msg(g.unguarded * 4 >= g.bits * 3, "%u of %u silent bit steps ended within 1.25 x the latency",
+                      g.unguarded, g.bits);
+        lss_master_free(m);
+        membus_free(b);
+}
+END_TEST
+
 /* A request sent less than 1 ms after one nobody answered (overlapping
  * transactions: engine-vcan's witness). */
 typedef struct overlaps {
@@ -1280,6 +1309,7 @@ int main(void) {
         tcase_add_test(tc, fastscan_one);
         tcase_add_test(tc, silent_bit_steps_wait_less);
         tcase_add_test(tc, lone_silent_bit_steps_have_no_late_guard);
+        tcase_add_test(tc, lone_bit_steps_outlast_two_stalls);
         tcase_add_test(tc, write_held_past_the_wait_keeps_it);
         tcase_add_test(tc, fastscan_nobody);
         tcase_add_test(tc, fastscan_beside_one_in_configuration);
