@@ -6,7 +6,9 @@
  * the wire one frame each (vcan) or merged into one (CAN, when they start
  * together), nothing expected (a bus's first Scan) or N finds expected (the
  * Scans after it), the largest distance of a reported progress from the
- * share of the enumeration's time gone, and where it was.
+ * share of the enumeration's time gone, and where it was; and the longest
+ * share of its time the progress stood still, counted as lssd publishes it
+ * (whole percents: a report 0.01 or more above the last published).
  * Not a test: prints a table. Every slave must be found, or it fails. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -55,8 +57,13 @@ static int one(unsigned n, bool merge, bool expected) {
                 lss_master_set_expected_finds(m, n);
         lss_master_enumerate(m, NULL, rep.t0);
         const lss_result *r = lss_drive(m, b, 3600ull * 1000000, NULL, NULL);
-        double total = (double) (membus_now(b) - rep.t0), off = 0, at = 0;
+        double total = (double) (membus_now(b) - rep.t0), off = 0, at = 0, still = 0, shown = 0, since = 0;
         for (size_t i = 0; i < rep.n; i++) {
+                if (rep.p[i] >= shown + 0.01) {
+                        still = rep.at_us[i] - since > still ? rep.at_us[i] - since : still;
+                        shown = rep.p[i];
+                        since = rep.at_us[i];
+                }
                 double d = rep.p[i] - rep.at_us[i] / total;
                 if (d < 0)
                         d = -d;
@@ -65,9 +72,10 @@ static int one(unsigned n, bool merge, bool expected) {
                         at = rep.at_us[i] / total;
                 }
         }
+        still = total - since > still ? total - since : still;
         int bad = r->status != LSS_OK || r->n_devices != n;
-        printf("%-4u %-7s %-9s %9.2f %9.3f %9.2f%s\n", n, merge ? "merged" : "one-each", expected ? "N" : "nothing",
-               total / 1e6, off, at, bad ? "  FAILED" : "");
+        printf("%-4u %-7s %-9s %9.2f %9.3f %9.2f %9.3f%s\n", n, merge ? "merged" : "one-each",
+               expected ? "N" : "nothing", total / 1e6, off, at, still / total, bad ? "  FAILED" : "");
         lss_master_free(m);
         membus_free(b);
         return bad;
@@ -77,7 +85,7 @@ int main(void) {
         static const unsigned ns[] = { 2, 4, 8, 16, 32, 64 };
         int bad = 0;
         printf("# enumeration: progress against the share of its time gone\n");
-        printf("%-4s %-7s %-9s %9s %9s %9s\n", "N", "answers", "expected", "time s", "max off", "at");
+        printf("%-4s %-7s %-9s %9s %9s %9s %9s\n", "N", "answers", "expected", "time s", "max off", "at", "still");
         for (int expected = 0; expected < 2; expected++)
                 for (int merge = 0; merge < 2; merge++)
                         for (size_t i = 0; i < sizeof(ns) / sizeof(ns[0]); i++)

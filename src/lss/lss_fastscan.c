@@ -68,7 +68,7 @@ static bool late_answer_watched(const lss_master *m, const lss_fastscan_state *s
              m->step.ends_at_answer = (s)->lone && (unguarded); m->step.silence_answers = (bit); \
              m->step.next_watches = (bit) && late_answer_watched(m, s); \
              m->step.watch_early = (s)->watch_next; (s)->watch_next = false; \
-             step_start(m); PT_YIELD(pc); \
+             step_start(m); PT_YIELD(pc); (s)->steps_since++; \
              judge_lone(m, s); (s)->before_sent_us = (s)->sent_us; \
              (s)->sent_us = m->step.sent_at + m->step.tx_us; (s)->after = AFTER_ANSWER; } while (0)
 
@@ -249,9 +249,44 @@ static bool floor_forces(const lss_fastscan_state *s) {
         return ((s->value[s->sub] ^ f) & ~low_bits(s->bit + 1)) == 0 && (f >> s->bit & 1u);
 }
 
+/* The steps field `sub` takes as planned now: one, its confirmation, when
+ * it was confirmed in an attempt before, is known or is to be guessed;
+ * else its unknown bits and the confirmation. */
+static unsigned field_steps(const lss_fastscan_state *s, unsigned sub) {
+        unsigned known = s->known.known_bits[sub];
+        if (sub < s->confirmed || known >= 32 || (s->guessing && sub < s->n_guess && known == 0))
+                return 1;
+        return 33 - known;
+}
+
+static unsigned steps_from(const lss_fastscan_state *s, unsigned sub) {
+        unsigned n = 0;
+        for (; sub < LSS_FIELD_COUNT; sub++)
+                n += field_steps(s, sub);
+        return n;
+}
+
+/* A fastscan's progress by its steps: those taken since the last report
+ * get their share of what was left, against the `ahead` steps still
+ * planned. So it never goes back, reaches 1 with the last confirmation,
+ * and moves on, slower, while a find asks again (a guess nobody has, bits
+ * read again). By field position instead, a find whose vendor, product
+ * and revision were guessed made 3/4 of its way in its first 3 steps and
+ * the serial's 32 bits the rest: a slow find stood still (issue 39). */
+static void fastscan_progress(lss_master *m, lss_fastscan_state *s, unsigned ahead) {
+        unsigned k = s->steps_since;
+        if (k == 0)
+                return;
+        s->steps_since = 0;
+        s->prog += (1.0 - s->prog) * k / (double) (k + ahead);
+        master_progress(m, s->prog);
+}
+
 int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
         PT_BEGIN(&s->pc);
         s->found = s->none = s->silent = s->heard = s->sent_last = false;
+        s->prog = 0;
+        s->steps_since = 0;
         memset(s->crowd_bits, 0, sizeof(s->crowd_bits));
         s->guessing = s->n_guess > 0;
         for (s->attempt = 0; s->attempt < m->timing.cfg.retries + 1; s->attempt++) {
@@ -270,6 +305,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                 }
                 step_start(m);
                 PT_YIELD(&s->pc);
+                s->steps_since++;
                 judge_lone(m, s);
                 if (m->step.void_)
                         continue;
@@ -278,6 +314,7 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                         break;
                 }
                 s->heard = true;
+                fastscan_progress(m, s, steps_from(s, 0));
                 for (s->sub = 0; s->sub < LSS_FIELD_COUNT; s->sub++) {
                         if (s->guessing && s->sub < s->n_guess && s->sub >= s->confirmed &&
                             s->known.known_bits[s->sub] == 0) {
@@ -289,9 +326,12 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                 FASTSCAN_STEP(m, s,
                                              lss_encode_fastscan(&f__, s->value[s->sub], 0, (uint8_t) s->sub,
                                                                  (uint8_t) ((s->sub + 1) % LSS_FIELD_COUNT)), false, false);
-                                if (step_answered(m))
+                                if (step_answered(m)) {
+                                        fastscan_progress(m, s, steps_from(s, s->sub + 1));
                                         continue;
+                                }
                                 s->guessing = false;
+                                fastscan_progress(m, s, steps_from(s, s->sub));
                                 s->after = AFTER_SILENT_CONFIRM;
                                 s->confirm_value = s->value[s->sub];
                                 s->confirm_guessed = true;
@@ -414,7 +454,8 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                                 }
                                                 if (m->cancelling)
                                                         goto out;
-                                                master_progress(m, (s->sub * 33.0 + (32 - s->bit)) / 133.0);
+                                                fastscan_progress(m, s, (unsigned) s->bit + 1 +
+                                                                                steps_from(s, s->sub + 1));
                                         }
                                 }
                                 if (s->late_confirmed)
@@ -424,8 +465,10 @@ int proc_fastscan(lss_master *m, lss_fastscan_state *s) {
                                         PT_CALL(&s->pc, confirm_field(m, s));
                                         if (!s->late_confirmed)
                                                 note_crowd(m, s, 32);
-                                        if (s->late_confirmed || step_answered(m))
+                                        if (s->late_confirmed || step_answered(m)) {
+                                                fastscan_progress(m, s, steps_from(s, s->sub + 1));
                                                 break;
+                                        }
                                         m->stats.retries++;
                                 }
                                 /* Nobody matched (the confirmation, or not even the

@@ -150,6 +150,8 @@ typedef struct lss_fastscan_state {
         unsigned searches;         /* this field read's searches for a bit read wrong */
         int match_lo, match_hi;    /* ... the prefix search: bits 31..lo match nobody, 31..hi somebody */
         uint64_t search_strays;    /* stats.stray_answers when it started */
+        double prog;               /* how far this fastscan is, 0..1 (fastscan_progress) */
+        unsigned steps_since;      /* steps taken since its last report */
 } lss_fastscan_state;
 
 typedef struct lss_assign_state {
