@@ -271,7 +271,7 @@ static unsigned steps_from(const lss_fastscan_state *s, unsigned sub) {
  * planned. So it never goes back, reaches 1 with the last confirmation,
  * and moves on, slower, while a find asks again (a guess nobody has, bits
  * read again). By field position instead, a find whose vendor, product
- * and revision were guessed made 3/4 of its way in its first 3 steps and
+ * and revision were guessed made 3/4 of its way in its first 4 steps and
  * the serial's 32 bits the rest: a slow find stood still (issue 39). */
 static void fastscan_progress(lss_master *m, lss_fastscan_state *s, unsigned ahead) {
         unsigned k = s->steps_since;
