@@ -269,6 +269,8 @@ typedef struct lss_scan_state {
         bool let_go;            /* this round's slave is configured and answers Fastscan in
                                  * configuration: a device, no candidate */
         lss_identity last_found; /* the last slave confirmed (its fields are the next fastscan's guess) */
+        uint8_t unlike[LSS_FIELD_COUNT - 1]; /* finds in a row whose vendor, product, revision
+                                 * differed from the find's before (fields_to_guess) */
         lss_fastscan_known known;
         lss_fastscan_known hint; /* enumeration: the last find and the top bits others shared with it */
         bool floored;           /* the last find (hint.value) was the least slave taking part, as far

@@ -839,6 +839,60 @@ START_TEST(find_progress_moves_with_its_steps) {
 }
 END_TEST
 
+/* Fastscan requests of the revision field: its confirmations (a guess
+ * or the end of a read) and its bit steps. */
+typedef struct revision_steps {
+        unsigned confirmations, bits;
+} revision_steps;
+
+static void count_revision_steps(void *ud, const lss_frame *f, uint64_t t) {
+        revision_steps *n = ud;
+        (void) t;
+        if (!lss_is_request(f) || f->data[0] != LSS_CS_FASTSCAN || f->data[6] != LSS_FIELD_REVISION)
+                return;
+        /* bitcheck 0: a confirmation moves on to the next field, bit 0's
+         * step stays in this one */
+        n->confirmations += f->data[5] == 0 && f->data[7] != LSS_FIELD_REVISION;
+        n->bits += f->data[5] < 32 && f->data[7] == LSS_FIELD_REVISION;
+}
+
+static revision_steps enumerate_revisions(bool differ) {
+        lss_slave_faults f = faults_latency(1000, 300);
+        membus *b = membus_new(125000);
+        uint32_t x = 777;
+        for (unsigned i = 0; i < 16; i++) {
+                x = x * 1103515245u + 12345u;
+                lss_identity id = { 0xEC, 0x1234, differ ? x : 7, 0x100 + 0x10000 * i };
+                membus_add_slave(b, &id, LSS_NODE_ID_UNCONFIGURED, &f);
+        }
+        revision_steps n = { 0 };
+        membus_set_trace(b, count_revision_steps, &n);
+        lss_master *m = master_default();
+        ck_assert_int_eq(lss_master_enumerate(m, NULL, membus_now(b)), 0);
+        const lss_result *r = run(m, b);
+        ck_assert_msg(r->status == LSS_OK, "%s", r->message);
+        ck_assert_uint_eq(r->n_devices, 16);
+        assert_devices_real(b, r);
+        lss_master_free(m);
+        membus_free(b);
+        return n;
+}
+
+/* The last find's revision is guessed while finds share it; one that
+ * changed from find to find twice is read without a guess first (each
+ * guess nobody has is a silent confirmation: 16 slaves with revisions all
+ * different took 31 revision confirmations before, 15 of them guesses,
+ * and 17 now, the second find's guess the only one). */
+START_TEST(changing_revision_not_guessed) {
+        revision_steps n = enumerate_revisions(true);
+        ck_assert_msg(n.confirmations <= 16 + 2, "%u revision confirmations", n.confirmations);
+        n = enumerate_revisions(false);
+        /* one revision: read by the first find, guessed by the 15 after it */
+        ck_assert_msg(n.confirmations <= 16 + 1 && n.bits <= 32, "one revision: %u confirmations, %u bit steps",
+                      n.confirmations, n.bits);
+}
+END_TEST
+
 START_TEST(enumerate_1) { enumerate_n(1, 1, false); enumerate_n(1, 2, true); }
 END_TEST
 START_TEST(enumerate_8) { enumerate_n(8, 3, false); enumerate_n(8, 4, true); }
@@ -1401,6 +1455,7 @@ int main(void) {
         tcase_add_test(tc, shared_top_bits_asked_at_once);
         tcase_add_test(tc, floor_bits_not_asked);
         tcase_add_test(tc, find_progress_moves_with_its_steps);
+        tcase_add_test(tc, changing_revision_not_guessed);
         tcase_add_test(tc, below_the_floor_still_found);
         suite_add_tcase(s, tc);
         return run_suite(s);
