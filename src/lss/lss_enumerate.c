@@ -143,13 +143,28 @@ int proc_confirm_by_selection(lss_master *m, lss_scan_state *s) {
         PT_END(&s->cpc);
 }
 
-/* The kept slaves back into configuration after a switch to waiting. */
+#define N_ADRIFT (sizeof(((lss_scan_state *) 0)->adrift) / sizeof(bool))
+
+static bool is_adrift(const lss_scan_state *s, const lss_device *d) {
+        size_t i = (size_t) (d - s->cand);
+        return i < N_ADRIFT && s->adrift[i];
+}
+
+static void set_adrift(lss_scan_state *s, size_t i, bool adrift) {
+        if (i < N_ADRIFT)
+                s->adrift[i] = adrift;
+}
+
+/* The kept slaves back into configuration after a switch to waiting. One
+ * whose selection stays unanswered (its frames lost) is adrift: in waiting
+ * it takes part in Fastscan, and found again it is kept again (handle_found);
+ * the give-back's verification reaches any other. */
 static int reselect_kept(lss_master *m, lss_scan_state *s) {
         PT_BEGIN(&s->rpc);
         for (s->i = 0; s->i < s->n_cand; s->i++)
                 if (kept(&s->cand[s->i]) && s->i != s->kept_now) {
-                        /* a silent one shows in the verification */
                         SELECT_RETRIED(m, &s->rpc, s->attempt, &s->cand[s->i].id);
+                        set_adrift(s, s->i, !step_answered(m));
                 }
         PT_END(&s->rpc);
 }
@@ -583,6 +598,19 @@ static int handle_found(lss_master *m, lss_scan_state *s) {
                  * (it answers a selection in any state). It stays set aside. */
                 s->confirm = CONFIRM_UNCLEAR;
         }
+        if (s->confirm == CONFIRM_OK && s->again != NULL && kept(s->again) && is_adrift(s, s->again) && !s->bends) {
+                /* Kept, but its reselection went unanswered: it was in
+                 * waiting, took part as a compliant slave does there, and
+                 * is in configuration again now, silent to Fastscan there
+                 * (the check above). Kept again, no verdict: with frames
+                 * lost at 3 %, 7 in 1000 blind Scans of 16 (loss-bench)
+                 * named a compliant slave "answered Fastscan again in
+                 * configuration state". */
+                s->kept_now = (size_t) (s->again - s->cand);
+                set_adrift(s, s->kept_now, false);
+                s->again->node_id = s->node;
+                goto reselect;
+        }
         if (s->confirm == CONFIRM_OK && s->again != NULL) {
                 /* Set aside, it still took part (a slave that answers
                  * Fastscan with a node-ID): keep it in configuration. Found
@@ -740,7 +768,10 @@ static int reexamine_kept(lss_master *m, lss_scan_state *s) {
                         continue;
                 }
                 /* no longer kept: set aside as a new candidate, or let go (configured) */
-                memmove(&s->cand[s->x], &s->cand[s->x + 1], (s->n_cand - s->x - 1) * sizeof(s->cand[0]));
+                for (size_t i = s->x; i + 1 < s->n_cand; i++) {
+                        s->cand[i] = s->cand[i + 1];
+                        set_adrift(s, i, is_adrift(s, &s->cand[i + 1]));
+                }
                 s->n_cand--;
                 s->n_kept--;
                 s->x--;
@@ -833,6 +864,7 @@ int proc_enumerate(lss_master *m, lss_scan_state *s) {
                 s->n_cand = s->n_direct = s->n_aside = s->n_kept = s->n_kept_bent = 0;
                 s->rounds = s->phantoms = s->failed_scans = s->n_other = s->looks = 0;
                 memset(s->unlike, 0, sizeof(s->unlike));
+                memset(s->adrift, 0, sizeof(s->adrift));
                 s->recheck = s->patient_round = false;
                 s->next_temp = LSS_NODE_ID_MAX;
                 s->hint = (lss_fastscan_known) { 0 };

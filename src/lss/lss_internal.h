@@ -292,6 +292,8 @@ typedef struct lss_scan_state {
         size_t n_stack, cap_stack;
         lss_device *cand;
         size_t n_cand, cap_cand;
+        bool adrift[LSS_ENUMERATE_MAX_FINDS + 1]; /* by candidate: kept, but its reselection went
+                                 * unanswered (reselect_kept): it may be in waiting */
 } lss_scan_state;
 
 typedef struct lss_bitrate_state {
