@@ -24,6 +24,30 @@ bool inquired_node_id_ok(lss_master *m) {
         return true;
 }
 
+/* The answer to Inquire Serial Number asked of the selected slave `id`:
+ * nobody else answered. */
+static bool alone_in_configuration(lss_master *m, const lss_identity *id) {
+        if (!step_answered(m)) {
+                master_fail_at(m, LSS_E_NO_RESPONSE, LSS_SERVICE_INQUIRE, LSS_REASON_NO_ANSWER,
+                               "the selected slave did not answer Inquire Serial Number: nothing configured");
+                return false;
+        }
+        uint32_t serial = lss_get_u32(m->step.answer.data + 1);
+        if (step_conflict(m)) {
+                master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_INQUIRE, LSS_REASON_SEVERAL_ANSWERS,
+                               "another slave is in configuration state beside the selected one (%u different "
+                               "answers to Inquire Serial Number): nothing configured", m->step.n_answers);
+                return false;
+        }
+        if (serial != id->serial) {
+                master_fail_at(m, LSS_E_CONFLICT, LSS_SERVICE_INQUIRE, LSS_REASON_SEVERAL_ANSWERS,
+                               "another slave is in configuration state instead of the selected one (serial "
+                               "%08x answered, not %08x): nothing configured", serial, id->serial);
+                return false;
+        }
+        return true;
+}
+
 bool configure_answer_ok(lss_master *m, uint8_t node_id) {
         if (!step_answered(m)) {
                 master_fail_at(m, LSS_E_NO_RESPONSE, LSS_SERVICE_CONFIGURE_NODE_ID, LSS_REASON_NO_ANSWER,
@@ -97,6 +121,21 @@ static int assign_tail(lss_master *m, lss_assign_state *s) {
                 goto out;
         }
 
+        if (!s->lone) {
+                /* Inquire Node-ID had two answers (or a void step): another
+                 * slave may be in configuration beside this one (it lost the
+                 * switches to waiting), and it would take the node-ID too
+                 * (loss-bench, 3 % loss: node-ID 6 stored in two slaves).
+                 * Their node-IDs look alike, their serials do not: only this
+                 * slave's may answer (a slave that answers twice gives it twice). */
+                REQUEST_RETRIED(m, &s->tail_pc, s->attempt, lss_encode_inquire(&f__, LSS_FIELD_SERIAL),
+                                LSS_CS_INQUIRE_VENDOR + LSS_FIELD_SERIAL);
+                AGAIN_PATIENTLY_IF_SILENT(m, REQUEST_RETRIED(m, &s->tail_pc, s->attempt,
+                                                             lss_encode_inquire(&f__, LSS_FIELD_SERIAL),
+                                                             LSS_CS_INQUIRE_VENDOR + LSS_FIELD_SERIAL));
+                if (!alone_in_configuration(m, &s->id))
+                        goto out;
+        }
         if ((s->taken && s->taken[s->node_id]) ||
             ((s->flags & LSS_ASSIGN_CHECK_FREE) && m->taken_fn && m->taken_fn(m->taken_ud, s->node_id, &s->id))) {
                 m->result.in_use = true;
